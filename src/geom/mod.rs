@@ -1,0 +1,16 @@
+//! Geometry: rays, boxes, the three primitive kinds and the scene that holds them.
+
+mod aabb;
+mod cone;
+mod ray;
+mod scene;
+mod sphere;
+mod triangle;
+
+pub use aabb::Aabb;
+pub use cone::Cone;
+pub use glam::Vec3;
+pub use ray::{Hit, PreparedRay, Ray, INVALID_ID};
+pub use scene::{Scene, GEOM_CONES, GEOM_SPHERES, GEOM_TRIANGLES};
+pub use sphere::Sphere;
+pub use triangle::{clip_triangle_bounds, intersect_triangle};

@@ -1,0 +1,141 @@
+use glam::Vec3;
+
+/// Marks "no geometry" / "no primitive" in a [`Hit`] (a miss).
+pub const INVALID_ID: u32 = u32::MAX;
+
+/// A ray segment `origin + t * dir` for `t` in `[t_min, t_max]`.
+///
+/// `dir` need not be normalised; `t` is in units of `dir`. A ray with a NaN
+/// component or a zero-length direction hits nothing.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
+pub struct Ray {
+    /// Origin.
+    pub origin: Vec3,
+    /// Start of the segment.
+    pub t_min: f32,
+    /// Direction (any length but zero).
+    pub dir: Vec3,
+    /// End of the segment.
+    pub t_max: f32,
+}
+
+impl Ray {
+    /// A ray over `[t_min, t_max]`.
+    pub fn new(origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> Ray {
+        Ray {
+            origin,
+            t_min,
+            dir,
+            t_max,
+        }
+    }
+
+    /// True when the ray can hit anything: finite origin and direction, a
+    /// non-zero direction and a non-empty, non-NaN interval.
+    pub fn is_valid(&self) -> bool {
+        self.origin.is_finite()
+            && self.dir.is_finite()
+            && self.dir != Vec3::ZERO
+            && self.t_min <= self.t_max
+            && !self.t_min.is_nan()
+    }
+}
+
+/// The closest (or any) intersection found along a ray.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
+pub struct Hit {
+    /// Ray parameter of the hit.
+    pub t: f32,
+    /// Surface coordinate: for triangles the barycentric weight of vertex 1
+    /// (as Embree), for cones the position along the axis in [0, 1].
+    pub u: f32,
+    /// Surface coordinate: for triangles the barycentric weight of vertex 2.
+    pub v: f32,
+    /// Geometric normal, not normalised, not flipped towards the ray.
+    pub ng: Vec3,
+    /// [`crate::geom::GEOM_TRIANGLES`], `GEOM_SPHERES`, `GEOM_CONES`, or [`INVALID_ID`] for a miss.
+    pub geom_id: u32,
+    /// Index of the primitive inside its geometry, or [`INVALID_ID`].
+    pub prim_id: u32,
+}
+
+impl Hit {
+    /// The value reported for a ray that hits nothing.
+    pub const MISS: Hit = Hit {
+        t: f32::INFINITY,
+        u: 0.0,
+        v: 0.0,
+        ng: Vec3::ZERO,
+        geom_id: INVALID_ID,
+        prim_id: INVALID_ID,
+    };
+
+    /// True when this records a hit.
+    pub fn is_hit(&self) -> bool {
+        self.geom_id != INVALID_ID
+    }
+}
+
+/// A ray with the per-ray constants that every test reuses: reciprocal
+/// direction for box and plane tests, and the shear of the watertight
+/// triangle test (Woop, Benthin and Wald 2013).
+#[derive(Clone, Copy, Debug)]
+pub struct PreparedRay {
+    /// Origin.
+    pub origin: Vec3,
+    /// Direction.
+    pub dir: Vec3,
+    /// `1 / dir` per component (infinite where the component is zero).
+    pub inv_dir: Vec3,
+    /// Start of the segment.
+    pub t_min: f32,
+    /// End of the segment.
+    pub t_max: f32,
+    pub(crate) kx: usize,
+    pub(crate) ky: usize,
+    pub(crate) kz: usize,
+    pub(crate) sx: f32,
+    pub(crate) sy: f32,
+    pub(crate) sz: f32,
+}
+
+impl PreparedRay {
+    /// Precomputes the per-ray constants. Call only for a [`Ray::is_valid`] ray.
+    pub fn new(ray: &Ray) -> PreparedRay {
+        let d = ray.dir;
+        let a = d.abs();
+        let kz = if a.x >= a.y && a.x >= a.z {
+            0
+        } else if a.y >= a.z {
+            1
+        } else {
+            2
+        };
+        let mut kx = (kz + 1) % 3;
+        let mut ky = (kx + 1) % 3;
+        if d[kz] < 0.0 {
+            core::mem::swap(&mut kx, &mut ky);
+        }
+        PreparedRay {
+            origin: ray.origin,
+            dir: d,
+            inv_dir: Vec3::ONE / d,
+            t_min: ray.t_min,
+            t_max: ray.t_max,
+            kx,
+            ky,
+            kz,
+            sx: d[kx] / d[kz],
+            sy: d[ky] / d[kz],
+            sz: 1.0 / d[kz],
+        }
+    }
+
+    /// The point at parameter `t`.
+    #[inline]
+    pub fn at(&self, t: f32) -> Vec3 {
+        self.origin + self.dir * t
+    }
+}

@@ -1,0 +1,179 @@
+use super::{clip_triangle_bounds, intersect_triangle, Aabb, Cone, Hit, PreparedRay, Sphere};
+use crate::Error;
+use glam::Vec3;
+
+/// Geometry id of the scene's triangle mesh.
+pub const GEOM_TRIANGLES: u32 = 0;
+/// Geometry id of the scene's spheres.
+pub const GEOM_SPHERES: u32 = 1;
+/// Geometry id of the scene's cones and cylinders.
+pub const GEOM_CONES: u32 = 2;
+
+/// The primitives a structure is built over, borrowed from the caller: one
+/// indexed triangle mesh, spheres and cones. Convex and concave polygons
+/// enter as triangles.
+///
+/// Structures name primitives by one global index: triangles first, then
+/// spheres, then cones. A [`Hit`] reports the geometry id and the index inside
+/// that geometry.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Scene<'a> {
+    /// Vertex positions.
+    pub vertices: &'a [[f32; 3]],
+    /// Triangles as three vertex indices.
+    pub triangles: &'a [[u32; 3]],
+    /// Spheres.
+    pub spheres: &'a [Sphere],
+    /// Open cones and cylinders.
+    pub cones: &'a [Cone],
+}
+
+impl<'a> Scene<'a> {
+    /// Number of primitives of all kinds.
+    #[inline]
+    pub fn prim_count(&self) -> usize {
+        self.triangles.len() + self.spheres.len() + self.cones.len()
+    }
+
+    /// Checks what would make tracing undefined: vertex indices out of range
+    /// and more primitives than the kd build can index (2^30). Degenerate
+    /// primitives are not errors; they are never hit.
+    pub fn check(&self) -> Result<(), Error> {
+        let n = self.prim_count();
+        if n >= (1 << 30) || self.vertices.len() > u32::MAX as usize {
+            return Err(Error::TooManyPrimitives { count: n });
+        }
+        let nv = self.vertices.len();
+        for (i, t) in self.triangles.iter().enumerate() {
+            for &v in t {
+                if v as usize >= nv {
+                    return Err(Error::IndexOutOfRange {
+                        triangle: i,
+                        vertex: v,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The three corners of triangle `i`. A missing vertex reads as NaN,
+    /// which no ray hits, so a scene changed after [`Scene::check`] cannot
+    /// make tracing panic.
+    #[inline]
+    pub fn triangle(&self, i: usize) -> [Vec3; 3] {
+        let t = self.triangles.get(i).copied().unwrap_or([u32::MAX; 3]);
+        let v = |k: u32| {
+            Vec3::from(
+                self.vertices
+                    .get(k as usize)
+                    .copied()
+                    .unwrap_or([f32::NAN; 3]),
+            )
+        };
+        [v(t[0]), v(t[1]), v(t[2])]
+    }
+
+    /// Bounds of primitive `prim` (global index), or `None` when it is
+    /// degenerate (zero area, zero or negative radius, NaN or infinite).
+    pub fn prim_bounds(&self, prim: usize) -> Option<Aabb> {
+        let nt = self.triangles.len();
+        let ns = self.spheres.len();
+        let b = if prim < nt {
+            let [a, b, c] = self.triangle(prim);
+            let n = (b - a).cross(c - a);
+            if !(a.is_finite() && b.is_finite() && c.is_finite() && n.length_squared() > 0.0) {
+                return None;
+            }
+            Aabb {
+                min: a.min(b).min(c),
+                max: a.max(b).max(c),
+            }
+        } else if prim < nt + ns {
+            let s = &self.spheres[prim - nt];
+            if !s.is_valid() {
+                return None;
+            }
+            s.bounds()
+        } else {
+            let c = &self.cones[prim - nt - ns];
+            if !c.is_valid() {
+                return None;
+            }
+            c.bounds()
+        };
+        if b.min.is_finite() && b.max.is_finite() {
+            Some(b)
+        } else {
+            None
+        }
+    }
+
+    /// Bounds of the part of primitive `prim` inside `voxel`: exact
+    /// polygon clipping for triangles, box intersection for the others.
+    pub fn clipped_bounds(&self, prim: usize, voxel: &Aabb) -> Option<Aabb> {
+        if prim < self.triangles.len() {
+            clip_triangle_bounds(self.triangle(prim), voxel)
+        } else {
+            let b = self.prim_bounds(prim)?.intersection(voxel);
+            if b.is_empty() {
+                None
+            } else {
+                Some(b)
+            }
+        }
+    }
+
+    /// Tests primitive `prim` (global index) for a hit in
+    /// `[ray.t_min, t_max]`.
+    #[inline]
+    pub fn intersect_prim(&self, prim: usize, r: &PreparedRay, t_max: f32) -> Option<Hit> {
+        let nt = self.triangles.len();
+        if prim < nt {
+            let [a, b, c] = self.triangle(prim);
+            let (t, u, v) = intersect_triangle(r, a, b, c, t_max)?;
+            return Some(Hit {
+                t,
+                u,
+                v,
+                ng: (a - b).cross(c - a),
+                geom_id: GEOM_TRIANGLES,
+                prim_id: prim as u32,
+            });
+        }
+        let ns = self.spheres.len();
+        if prim < nt + ns {
+            let i = prim - nt;
+            let (t, ng) = self.spheres[i].intersect(r, t_max)?;
+            return Some(Hit {
+                t,
+                u: 0.0,
+                v: 0.0,
+                ng,
+                geom_id: GEOM_SPHERES,
+                prim_id: i as u32,
+            });
+        }
+        let i = prim - nt - ns;
+        let (t, u, ng) = self.cones.get(i)?.intersect(r, t_max)?;
+        Some(Hit {
+            t,
+            u,
+            v: 0.0,
+            ng,
+            geom_id: GEOM_CONES,
+            prim_id: i as u32,
+        })
+    }
+
+    /// Bounds of every non-degenerate primitive.
+    pub fn bounds(&self) -> Aabb {
+        let mut b = Aabb::EMPTY;
+        for p in 0..self.prim_count() {
+            if let Some(pb) = self.prim_bounds(p) {
+                b = b.union(&pb);
+            }
+        }
+        b
+    }
+}

@@ -1,0 +1,112 @@
+use super::{Aabb, PreparedRay};
+use glam::Vec3;
+
+/// Watertight ray-triangle test (Woop, Benthin and Wald, JCGT 2013): no ray
+/// slips between two triangles that share an edge. Both sides are hit.
+/// Returns `(t, u, v)` with `u`, `v` the weights of `v1` and `v2`, for `t`
+/// in `[ray.t_min, t_max]`. A zero-area or NaN triangle is never hit.
+#[inline]
+pub fn intersect_triangle(
+    r: &PreparedRay,
+    v0: Vec3,
+    v1: Vec3,
+    v2: Vec3,
+    t_max: f32,
+) -> Option<(f32, f32, f32)> {
+    let a = v0 - r.origin;
+    let b = v1 - r.origin;
+    let c = v2 - r.origin;
+    let (kx, ky, kz) = (r.kx, r.ky, r.kz);
+    let ax = a[kx] - r.sx * a[kz];
+    let ay = a[ky] - r.sy * a[kz];
+    let bx = b[kx] - r.sx * b[kz];
+    let by = b[ky] - r.sy * b[kz];
+    let cx = c[kx] - r.sx * c[kz];
+    let cy = c[ky] - r.sy * c[kz];
+    let mut u = cx * by - cy * bx;
+    let mut v = ax * cy - ay * cx;
+    let mut w = bx * ay - by * ax;
+    if u == 0.0 || v == 0.0 || w == 0.0 {
+        // On an edge in single precision: decide it in double, as the paper does.
+        u = (cx as f64 * by as f64 - cy as f64 * bx as f64) as f32;
+        v = (ax as f64 * cy as f64 - ay as f64 * cx as f64) as f32;
+        w = (bx as f64 * ay as f64 - by as f64 * ax as f64) as f32;
+    }
+    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+        return None;
+    }
+    let det = u + v + w;
+    if det == 0.0 || det.is_nan() {
+        return None;
+    }
+    let az = r.sz * a[kz];
+    let bz = r.sz * b[kz];
+    let cz = r.sz * c[kz];
+    let t_scaled = u * az + v * bz + w * cz;
+    let inv_det = 1.0 / det;
+    let t = t_scaled * inv_det;
+    if !(t >= r.t_min && t <= t_max) {
+        return None;
+    }
+    Some((t, v * inv_det, w * inv_det))
+}
+
+/// Bounds of the part of triangle `v` inside `voxel` (Sutherland-Hodgman
+/// against the six faces), or `None` when nothing of it is inside. This is
+/// the split clipping of the kd build: a straddling triangle's events come
+/// from its clipped part, not from its whole box.
+pub fn clip_triangle_bounds(v: [Vec3; 3], voxel: &Aabb) -> Option<Aabb> {
+    // A convex polygon clipped by 6 planes has at most 3 + 6 vertices.
+    let mut poly = [Vec3::ZERO; 9];
+    let mut tmp = [Vec3::ZERO; 9];
+    poly[..3].copy_from_slice(&v);
+    let mut n = 3;
+    for axis in 0..3 {
+        for side in 0..2 {
+            let (plane, keep_below) = if side == 0 {
+                (voxel.min[axis], false)
+            } else {
+                (voxel.max[axis], true)
+            };
+            let inside = |p: Vec3| {
+                if keep_below {
+                    p[axis] <= plane
+                } else {
+                    p[axis] >= plane
+                }
+            };
+            let mut m = 0;
+            for i in 0..n {
+                let p = poly[i];
+                let q = poly[(i + 1) % n];
+                let (pin, qin) = (inside(p), inside(q));
+                if pin {
+                    tmp[m] = p;
+                    m += 1;
+                }
+                if pin != qin && m < 9 {
+                    let s = (plane - p[axis]) / (q[axis] - p[axis]);
+                    let mut x = p + (q - p) * s;
+                    x[axis] = plane;
+                    tmp[m] = x;
+                    m += 1;
+                }
+            }
+            n = m;
+            if n == 0 {
+                return None;
+            }
+            poly[..n].copy_from_slice(&tmp[..n]);
+        }
+    }
+    let mut b = Aabb::EMPTY;
+    for p in &poly[..n] {
+        b = b.grow(*p);
+    }
+    let b = b.intersection(voxel);
+    if b.is_empty() {
+        None
+    } else {
+        Some(b)
+    }
+}

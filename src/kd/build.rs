@@ -1,0 +1,566 @@
+//! SAH kd-tree build in O(N log N) from sorted split events (Wald and
+//! Havran 2006), with split clipping, entirely inside caller slices.
+//!
+//! Events of a node sit contiguously in the scratch slice, grouped by axis and
+//! sorted by (position, kind). A split classifies primitives from the split
+//! axis' events, clips the straddling ones into both children, sorts only
+//! those new events and merges them with the filtered old ones: no node
+//! sorts its whole list again. Depth-first order keeps the live events to the
+//! pending right children plus one split's temporaries.
+
+use super::node::{KdInfo, KdLeaf, KdNode, KD_FLAG_TRUNCATED, KD_MAGIC, KD_MAX_DEPTH, KD_VERSION};
+use super::{min_requirements, ropes, KdParams, KdScratch, KdStorage, KdTree};
+use crate::geom::{Aabb, Scene};
+use crate::Error;
+use core::cmp::Ordering;
+
+/// One split event: a primitive's clipped box starts, ends or lies flat at
+/// `pos` on some axis. `word` is `prim << 2 | kind`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C)]
+pub struct KdEvent {
+    /// Position on the event's axis.
+    pub pos: f32,
+    /// Primitive index shifted left by 2, kind in the low bits.
+    pub word: u32,
+}
+
+const END: u32 = 0;
+const PLANAR: u32 = 1;
+const START: u32 = 2;
+
+const BOTH: u8 = 0;
+const LEFT: u8 = 1;
+const RIGHT: u8 = 2;
+
+impl KdEvent {
+    fn new(pos: f32, prim: usize, kind: u32) -> KdEvent {
+        // `+ 0.0` turns -0.0 into 0.0, so equal positions sort as equal.
+        KdEvent {
+            pos: pos + 0.0,
+            word: ((prim as u32) << 2) | kind,
+        }
+    }
+    #[inline]
+    fn prim(&self) -> usize {
+        (self.word >> 2) as usize
+    }
+    #[inline]
+    fn kind(&self) -> u32 {
+        self.word & 3
+    }
+    /// Sweep order: position, then end < planar < start, then primitive
+    /// (which makes the build deterministic).
+    fn order(a: &KdEvent, b: &KdEvent) -> Ordering {
+        a.pos
+            .partial_cmp(&b.pos)
+            .unwrap_or(Ordering::Equal)
+            .then((a.word & 3).cmp(&(b.word & 3)))
+            .then(a.word.cmp(&b.word))
+    }
+}
+
+/// A node waiting to be built: its events are `events[start..]`, `counts[a]`
+/// of them on axis `a`, in axis order.
+#[derive(Clone, Copy, Debug)]
+struct Task {
+    node: u32,
+    depth: u32,
+    voxel: Aabb,
+    start: usize,
+    counts: [usize; 3],
+    prims: usize,
+}
+
+impl Task {
+    fn total(&self) -> usize {
+        self.counts[0] + self.counts[1] + self.counts[2]
+    }
+    fn axis_range(&self, axis: usize) -> (usize, usize) {
+        let s = self.start + self.counts[..axis].iter().sum::<usize>();
+        (s, s + self.counts[axis])
+    }
+}
+
+/// The best plane of a node's sweep.
+#[derive(Clone, Copy, Debug)]
+struct Split {
+    axis: usize,
+    pos: f32,
+    planar_left: bool,
+    cost: f32,
+}
+
+/// Appends the events of box `b` on `axis` at `events[*at..]`.
+fn push_events(events: &mut [KdEvent], at: &mut usize, prim: usize, b: &Aabb, axis: usize) {
+    if b.min[axis] == b.max[axis] {
+        events[*at] = KdEvent::new(b.min[axis], prim, PLANAR);
+        *at += 1;
+    } else {
+        events[*at] = KdEvent::new(b.min[axis], prim, START);
+        events[*at + 1] = KdEvent::new(b.max[axis], prim, END);
+        *at += 2;
+    }
+}
+
+fn area64(b: &Aabb) -> f64 {
+    let e = (b.max - b.min).as_dvec3();
+    2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
+}
+
+fn with_max(b: &Aabb, axis: usize, v: f32) -> Aabb {
+    let mut r = *b;
+    r.max[axis] = v;
+    r
+}
+
+fn with_min(b: &Aabb, axis: usize, v: f32) -> Aabb {
+    let mut r = *b;
+    r.min[axis] = v;
+    r
+}
+
+struct Builder<'s, 'a> {
+    scene: &'s Scene<'s>,
+    params: KdParams,
+    depth_limit: u32,
+    nodes: &'a mut [KdNode],
+    leaves: &'a mut [KdLeaf],
+    ropes: &'a mut [super::KdRopes],
+    refs: &'a mut [u32],
+    events: &'s mut [KdEvent],
+    flags: &'s mut [u8],
+    node_cap: usize,
+    leaf_cap: usize,
+    node_top: usize,
+    leaf_top: usize,
+    ref_top: usize,
+    /// References held by the leaves made so far plus every pending node:
+    /// what the finished tree needs at least.
+    frontier_refs: usize,
+    pending: usize,
+    depth: u32,
+    truncated: bool,
+}
+
+/// Builds an SAH kd-tree over `scene` into `storage`, using `scratch`.
+///
+/// Fails only for bad input (indices out of range, bad parameters) or for
+/// slices shorter than [`min_requirements`]. With less room than
+/// [`super::requirements`] it stops splitting where room runs out, stays
+/// correct, and sets [`KD_FLAG_TRUNCATED`] in the tree's info.
+pub fn build_sah<'a>(
+    scene: &Scene<'a>,
+    params: &KdParams,
+    storage: KdStorage<'a>,
+    scratch: KdScratch<'_>,
+) -> Result<KdTree<'a>, Error> {
+    scene.check()?;
+    params.check()?;
+    let n = scene.prim_count();
+    let min = min_requirements(n);
+    let have = [
+        ("nodes", min.nodes, storage.nodes.len()),
+        ("leaves", min.leaves, storage.leaves.len()),
+        (
+            "ropes",
+            storage.leaves.len().max(min.ropes),
+            storage.ropes.len(),
+        ),
+        ("refs", min.refs, storage.refs.len()),
+        ("events", min.events, scratch.events.len()),
+        ("prim_flags", min.prim_flags, scratch.prim_flags.len()),
+    ];
+    for (slice, needed, got) in have {
+        if got < needed {
+            return Err(Error::SliceTooSmall { slice, needed, got });
+        }
+    }
+    let node_cap = storage
+        .nodes
+        .len()
+        .min(2 * storage.leaves.len() - 1)
+        .min(1 << 30);
+    let leaf_cap = storage.leaves.len().min(1 << 30);
+    let mut b = Builder {
+        scene,
+        params: *params,
+        depth_limit: params.depth_limit(n),
+        nodes: storage.nodes,
+        leaves: storage.leaves,
+        ropes: storage.ropes,
+        refs: storage.refs,
+        events: scratch.events,
+        flags: scratch.prim_flags,
+        node_cap,
+        leaf_cap,
+        node_top: 1,
+        leaf_top: 0,
+        ref_top: 0,
+        frontier_refs: 0,
+        pending: 0,
+        depth: 0,
+        truncated: false,
+    };
+    let root = b.root_task();
+    b.run(root);
+    let bounds = root.voxel;
+    ropes::build_ropes(&b.nodes[..b.node_top], &mut b.ropes[..b.leaf_top], &bounds);
+    let info = KdInfo {
+        magic: KD_MAGIC,
+        version: KD_VERSION,
+        triangle_count: scene.triangles.len() as u32,
+        sphere_count: scene.spheres.len() as u32,
+        cone_count: scene.cones.len() as u32,
+        valid_prim_count: root.prims as u32,
+        node_count: b.node_top as u32,
+        leaf_count: b.leaf_top as u32,
+        ref_count: b.ref_top as u32,
+        depth: b.depth,
+        flags: if b.truncated { KD_FLAG_TRUNCATED } else { 0 },
+        bounds_min: bounds.min.into(),
+        bounds_max: bounds.max.into(),
+    };
+    let (node_top, leaf_top, ref_top) = (b.node_top, b.leaf_top, b.ref_top);
+    let (nodes, leaves, ropes, refs) = (b.nodes, b.leaves, b.ropes, b.refs);
+    Ok(KdTree {
+        scene: *scene,
+        info,
+        nodes: &nodes[..node_top],
+        leaves: &leaves[..leaf_top],
+        ropes: &ropes[..leaf_top],
+        refs: &refs[..ref_top],
+    })
+}
+
+impl<'s, 'a> Builder<'s, 'a> {
+    /// Events of every non-degenerate primitive, sorted once per axis.
+    fn root_task(&mut self) -> Task {
+        let n = self.scene.prim_count();
+        let mut voxel = Aabb::EMPTY;
+        let mut valid = 0;
+        for p in 0..n {
+            if let Some(b) = self.scene.prim_bounds(p) {
+                voxel = voxel.union(&b);
+                valid += 1;
+            }
+        }
+        let mut at = 0;
+        let mut counts = [0; 3];
+        for (axis, count) in counts.iter_mut().enumerate() {
+            let s = at;
+            for p in 0..n {
+                if let Some(b) = self.scene.prim_bounds(p) {
+                    push_events(self.events, &mut at, p, &b, axis);
+                }
+            }
+            self.events[s..at].sort_unstable_by(KdEvent::order);
+            *count = at - s;
+        }
+        self.frontier_refs = valid;
+        Task {
+            node: 0,
+            depth: 0,
+            voxel,
+            start: 0,
+            counts,
+            prims: valid,
+        }
+    }
+
+    /// Depth-first: split the current node while it pays, keep right
+    /// children on a stack bounded by the depth limit.
+    fn run(&mut self, root: Task) {
+        let mut stack = [root; KD_MAX_DEPTH as usize + 1];
+        let mut task = root;
+        loop {
+            match self.try_split(&task) {
+                Some((left, right)) => {
+                    stack[self.pending] = right;
+                    self.pending += 1;
+                    task = left;
+                }
+                None => {
+                    self.make_leaf(&task);
+                    if self.pending == 0 {
+                        return;
+                    }
+                    self.pending -= 1;
+                    task = stack[self.pending];
+                }
+            }
+        }
+    }
+
+    fn make_leaf(&mut self, task: &Task) {
+        let li = self.leaf_top;
+        self.leaf_top += 1;
+        let first = self.ref_top;
+        let (s, e) = task.axis_range(0);
+        for i in s..e {
+            let ev = self.events[i];
+            if ev.kind() != END {
+                self.refs[self.ref_top] = ev.prim() as u32;
+                self.ref_top += 1;
+            }
+        }
+        self.leaves[li] = KdLeaf {
+            first_ref: first as u32,
+            ref_count: (self.ref_top - first) as u32,
+        };
+        self.ropes[li].min = task.voxel.min.into();
+        self.ropes[li].max = task.voxel.max.into();
+        self.nodes[task.node as usize] = KdNode::leaf(li as u32);
+        self.depth = self.depth.max(task.depth);
+    }
+
+    /// The SAH sweep over the three axes' sorted events.
+    fn find_split(&self, task: &Task) -> Option<Split> {
+        let v = &task.voxel;
+        // Areas in f64: boxes of huge scenes overflow f32 areas.
+        let area = area64(v);
+        if !(area > 0.0 && area.is_finite()) {
+            return None;
+        }
+        let inv_area = 1.0 / area;
+        let (kt, ki, bonus) = (
+            self.params.cost_traversal,
+            self.params.cost_intersection,
+            self.params.empty_bonus,
+        );
+        let cost = |pl: f32, pr: f32, nl: usize, nr: usize| {
+            let c = kt + ki * (pl * nl as f32 + pr * nr as f32);
+            if nl == 0 || nr == 0 {
+                c * bonus
+            } else {
+                c
+            }
+        };
+        let mut best: Option<Split> = None;
+        for axis in 0..3 {
+            if !(v.min[axis] < v.max[axis]) {
+                continue;
+            }
+            let (s, e) = task.axis_range(axis);
+            let ev = &self.events[s..e];
+            let (mut nl, mut nr) = (0usize, task.prims);
+            let mut i = 0;
+            while i < ev.len() {
+                let p = ev[i].pos;
+                let (mut ends, mut planars, mut starts) = (0, 0, 0);
+                while i < ev.len() && ev[i].pos == p && ev[i].kind() == END {
+                    ends += 1;
+                    i += 1;
+                }
+                while i < ev.len() && ev[i].pos == p && ev[i].kind() == PLANAR {
+                    planars += 1;
+                    i += 1;
+                }
+                while i < ev.len() && ev[i].pos == p && ev[i].kind() == START {
+                    starts += 1;
+                    i += 1;
+                }
+                nr -= planars + ends;
+                if p > v.min[axis] && p < v.max[axis] {
+                    let pl = (area64(&with_max(v, axis, p)) * inv_area) as f32;
+                    let pr = (area64(&with_min(v, axis, p)) * inv_area) as f32;
+                    let cl = cost(pl, pr, nl + planars, nr);
+                    let cr = cost(pl, pr, nl, nr + planars);
+                    let (c, planar_left) = if cl <= cr { (cl, true) } else { (cr, false) };
+                    if best.map_or(true, |b| c < b.cost) {
+                        best = Some(Split {
+                            axis,
+                            pos: p,
+                            planar_left,
+                            cost: c,
+                        });
+                    }
+                }
+                nl += starts + planars;
+            }
+        }
+        best
+    }
+
+    /// Splits `task` when the termination rule and the room allow; returns
+    /// the (left, right) children with their events in place.
+    fn try_split(&mut self, task: &Task) -> Option<(Task, Task)> {
+        let n = task.prims;
+        if n <= self.params.leaf_size as usize || task.depth >= self.depth_limit {
+            return None;
+        }
+        let split = self.find_split(task)?;
+        if self.params.sah_termination && split.cost >= self.params.cost_intersection * n as f32 {
+            return None;
+        }
+        if self.node_top + 2 > self.node_cap || self.leaf_top + self.pending + 2 > self.leaf_cap {
+            self.truncated = true;
+            return None;
+        }
+        let (k, p) = (split.axis, split.pos);
+
+        // Classify from the split axis' events.
+        let (ks, ke) = task.axis_range(k);
+        for i in ks..ke {
+            let prim = self.events[i].prim();
+            self.flags[prim] = BOTH;
+        }
+        for i in ks..ke {
+            let ev = self.events[i];
+            let side = match ev.kind() {
+                END if ev.pos <= p => LEFT,
+                START if ev.pos >= p => RIGHT,
+                PLANAR if ev.pos < p || (ev.pos == p && split.planar_left) => LEFT,
+                PLANAR => RIGHT,
+                _ => continue,
+            };
+            self.flags[ev.prim()] = side;
+        }
+        let mut straddling = 0;
+        let (mut left_only, mut right_only) = (0, 0);
+        for i in ks..ke {
+            let ev = self.events[i];
+            if ev.kind() != END {
+                match self.flags[ev.prim()] {
+                    LEFT => left_only += 1,
+                    RIGHT => right_only += 1,
+                    _ => straddling += 1,
+                }
+            }
+        }
+        let mut el_old = [0usize; 3];
+        let mut er_old = [0usize; 3];
+        for (axis, (l, r)) in el_old.iter_mut().zip(er_old.iter_mut()).enumerate() {
+            let (s, e) = task.axis_range(axis);
+            for i in s..e {
+                match self.flags[self.events[i].prim()] {
+                    LEFT => *l += 1,
+                    RIGHT => *r += 1,
+                    _ => {}
+                }
+            }
+        }
+
+        // New events of the straddling primitives, clipped into each child.
+        let top = task.start + task.total();
+        let s2 = 2 * straddling;
+        let dest = top + 12 * straddling;
+        let old_total: usize = el_old.iter().sum::<usize>() + er_old.iter().sum::<usize>();
+        if dest + old_total + 12 * straddling > self.events.len() {
+            self.truncated = true;
+            return None;
+        }
+        let lv = with_max(&task.voxel, k, p);
+        let rv = with_min(&task.voxel, k, p);
+        let mut tl = [0usize; 3];
+        let mut tr = [0usize; 3];
+        let (mut nl_new, mut nr_new) = (0, 0);
+        for i in ks..ke {
+            let ev = self.events[i];
+            if ev.kind() != START || self.flags[ev.prim()] != BOTH {
+                continue;
+            }
+            let prim = ev.prim();
+            if let Some(b) = self.scene.clipped_bounds(prim, &lv) {
+                nl_new += 1;
+                for (axis, c) in tl.iter_mut().enumerate() {
+                    let mut at = top + axis * s2 + *c;
+                    push_events(self.events, &mut at, prim, &b, axis);
+                    *c = at - top - axis * s2;
+                }
+            }
+            if let Some(b) = self.scene.clipped_bounds(prim, &rv) {
+                nr_new += 1;
+                for (axis, c) in tr.iter_mut().enumerate() {
+                    let base = top + 6 * straddling + axis * s2;
+                    let mut at = base + *c;
+                    push_events(self.events, &mut at, prim, &b, axis);
+                    *c = at - base;
+                }
+            }
+        }
+        let nl = left_only + nl_new;
+        let nr = right_only + nr_new;
+        if !self.params.sah_termination && nl == n && nr == n {
+            return None;
+        }
+        let frontier = (self.frontier_refs + nl + nr).saturating_sub(n);
+        if frontier > self.refs.len() {
+            self.truncated = true;
+            return None;
+        }
+        let el: usize = el_old.iter().sum::<usize>() + tl.iter().sum::<usize>();
+        let er: usize = er_old.iter().sum::<usize>() + tr.iter().sum::<usize>();
+
+        // Merge old and new events per axis into the two destinations.
+        let mut lcounts = [0usize; 3];
+        let mut rcounts = [0usize; 3];
+        let (mut lat, mut rat) = (dest, dest + el);
+        for axis in 0..3 {
+            let (s, e) = task.axis_range(axis);
+            let lnew = top + axis * s2;
+            let rnew = top + 6 * straddling + axis * s2;
+            self.events[lnew..lnew + tl[axis]].sort_unstable_by(KdEvent::order);
+            self.events[rnew..rnew + tr[axis]].sort_unstable_by(KdEvent::order);
+            let l0 = lat;
+            self.merge(s, e, LEFT, lnew, lnew + tl[axis], &mut lat);
+            lcounts[axis] = lat - l0;
+            let r0 = rat;
+            self.merge(s, e, RIGHT, rnew, rnew + tr[axis], &mut rat);
+            rcounts[axis] = rat - r0;
+        }
+        // Right child first at the node's base (it waits), left on top.
+        let base = task.start;
+        self.events.copy_within(dest + el..dest + el + er, base);
+        self.events.copy_within(dest..dest + el, base + er);
+
+        let c = self.node_top as u32;
+        self.node_top += 2;
+        self.nodes[task.node as usize] = KdNode::interior(k, p, c);
+        self.frontier_refs = frontier;
+        let left = Task {
+            node: c,
+            depth: task.depth + 1,
+            voxel: lv,
+            start: base + er,
+            counts: lcounts,
+            prims: nl,
+        };
+        let right = Task {
+            node: c + 1,
+            depth: task.depth + 1,
+            voxel: rv,
+            start: base,
+            counts: rcounts,
+            prims: nr,
+        };
+        Some((left, right))
+    }
+
+    /// Merges the old events in `[s, e)` whose primitive is on `side` with
+    /// the sorted new events in `[ns, ne)`, writing at `*at`.
+    fn merge(&mut self, s: usize, e: usize, side: u8, ns: usize, ne: usize, at: &mut usize) {
+        let (mut i, mut j) = (s, ns);
+        loop {
+            while i < e && self.flags[self.events[i].prim()] != side {
+                i += 1;
+            }
+            let take_old = match (i < e, j < ne) {
+                (false, false) => return,
+                (true, false) => true,
+                (false, true) => false,
+                (true, true) => {
+                    KdEvent::order(&self.events[i], &self.events[j]) != Ordering::Greater
+                }
+            };
+            if take_old {
+                self.events[*at] = self.events[i];
+                i += 1;
+            } else {
+                self.events[*at] = self.events[j];
+                j += 1;
+            }
+            *at += 1;
+        }
+    }
+}

@@ -1,0 +1,271 @@
+//! SAH kd-trees (rectilinear BSP) over caller memory: build, ropes,
+//! hierarchical and rope traversal, validation.
+//!
+//! ```text
+//! let req = kd::requirements(scene.prim_count(), &params);   // element counts
+//! // caller provides slices of those lengths
+//! let tree = kd::build_sah(&scene, &params, storage, scratch)?;
+//! let hit = tree.intersect(&ray, Traversal::Hierarchical, &mut stats);
+//! ```
+
+mod build;
+mod node;
+mod ropes;
+mod traverse;
+mod validate;
+
+pub use build::{build_sah, KdEvent};
+pub use node::{
+    KdInfo, KdLeaf, KdNode, KdRopes, KD_FLAG_TRUNCATED, KD_MAGIC, KD_MAX_DEPTH, KD_VERSION, NO_NODE,
+};
+pub use traverse::Traversal;
+pub use validate::KdTreeStats;
+
+use crate::{Error, Scene};
+
+/// How a build decides where to stop, and what its SAH costs are.
+///
+/// Cost constants are those of Wald and Havran (2006): a traversal step costs
+/// `cost_traversal` = 15, a ray-primitive test `cost_intersection` = 20, and a
+/// split with an empty child is discounted by `empty_bonus` = 0.8.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct KdParams {
+    /// Deepest leaf allowed; 0 derives it from the primitive count as
+    /// `round(8 + 1.3 log2 N)` (capped at [`KD_MAX_DEPTH`]).
+    pub max_depth: u32,
+    /// A node with at most this many primitives becomes a leaf.
+    pub leaf_size: u32,
+    /// When true, a node becomes a leaf whenever no split is cheaper than
+    /// the leaf by the SAH; when false, split down to `leaf_size` or
+    /// `max_depth` (a split that separates nothing still stops).
+    pub sah_termination: bool,
+    /// SAH cost of one traversal step.
+    pub cost_traversal: f32,
+    /// SAH cost of one ray-primitive test.
+    pub cost_intersection: f32,
+    /// Factor (in (0, 1]) applied to the cost of a split with an empty side.
+    pub empty_bonus: f32,
+    /// Ideal room for references, as a multiple of the primitive count
+    /// (references are duplicated where primitives straddle splits).
+    pub refs_per_prim: u32,
+}
+
+impl KdParams {
+    /// The LCTS paper's settings: maximum depth 16, a node with at most 2
+    /// objects becomes a leaf.
+    pub const fn paper() -> KdParams {
+        KdParams {
+            max_depth: 16,
+            leaf_size: 2,
+            sah_termination: false,
+            cost_traversal: 15.0,
+            cost_intersection: 20.0,
+            empty_bonus: 0.8,
+            refs_per_prim: 4,
+        }
+    }
+
+    /// SAH-driven termination with a depth bound from N.
+    pub const fn auto() -> KdParams {
+        KdParams {
+            max_depth: 0,
+            leaf_size: 1,
+            sah_termination: true,
+            cost_traversal: 15.0,
+            cost_intersection: 20.0,
+            empty_bonus: 0.8,
+            refs_per_prim: 4,
+        }
+    }
+
+    /// Checks every field's range.
+    pub fn check(&self) -> Result<(), Error> {
+        if self.max_depth > KD_MAX_DEPTH {
+            return Err(Error::InvalidParameter { name: "max_depth" });
+        }
+        if !(self.cost_traversal > 0.0 && self.cost_traversal.is_finite()) {
+            return Err(Error::InvalidParameter {
+                name: "cost_traversal",
+            });
+        }
+        if !(self.cost_intersection > 0.0 && self.cost_intersection.is_finite()) {
+            return Err(Error::InvalidParameter {
+                name: "cost_intersection",
+            });
+        }
+        if !(self.empty_bonus > 0.0 && self.empty_bonus <= 1.0) {
+            return Err(Error::InvalidParameter {
+                name: "empty_bonus",
+            });
+        }
+        if self.refs_per_prim == 0 || self.refs_per_prim > 64 {
+            return Err(Error::InvalidParameter {
+                name: "refs_per_prim",
+            });
+        }
+        Ok(())
+    }
+
+    /// The depth bound in force for `prim_count` primitives.
+    pub fn depth_limit(&self, prim_count: usize) -> u32 {
+        if self.max_depth != 0 {
+            return self.max_depth;
+        }
+        let log2 = if prim_count <= 1 {
+            0.0
+        } else {
+            libm::log2f(prim_count as f32)
+        };
+        (libm::roundf(8.0 + 1.3 * log2) as u32).min(KD_MAX_DEPTH)
+    }
+}
+
+impl Default for KdParams {
+    fn default() -> Self {
+        KdParams::auto()
+    }
+}
+
+/// Element counts of the slices a build needs. The tree's own slices
+/// (`nodes`, `leaves`, `ropes`, `refs`) are kept; the scratch slices
+/// (`events`, `prim_flags`) may be reused once the build returns.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct KdRequirements {
+    /// [`KdNode`] slots.
+    pub nodes: usize,
+    /// [`KdLeaf`] slots; `ropes` has as many.
+    pub leaves: usize,
+    /// [`KdRopes`] slots.
+    pub ropes: usize,
+    /// Primitive references (`u32`).
+    pub refs: usize,
+    /// Build scratch: [`KdEvent`] slots.
+    pub events: usize,
+    /// Build scratch: one byte per primitive.
+    pub prim_flags: usize,
+}
+
+/// The room for a tree of `prim_count` primitives that does not stop
+/// splitting for lack of space in ordinary scenes: `refs_per_prim * N`
+/// references, two leaves per reference, and event scratch for the
+/// pending subtrees plus one split's temporaries.
+///
+/// A build given less (down to [`min_requirements`]) still succeeds; it
+/// stops splitting where room runs out and sets [`KD_FLAG_TRUNCATED`].
+pub fn requirements(prim_count: usize, params: &KdParams) -> KdRequirements {
+    let n = prim_count.max(1);
+    let refs = n * params.refs_per_prim.max(1) as usize;
+    let leaves = 2 * refs + 1;
+    KdRequirements {
+        nodes: 2 * leaves - 1,
+        leaves,
+        ropes: leaves,
+        refs,
+        events: 12 * refs,
+        prim_flags: prim_count,
+    }
+}
+
+/// The least room a build accepts: one leaf holding every primitive, and
+/// the six events per primitive of the root's sweep.
+pub fn min_requirements(prim_count: usize) -> KdRequirements {
+    KdRequirements {
+        nodes: 1,
+        leaves: 1,
+        ropes: 1,
+        refs: prim_count,
+        events: 6 * prim_count,
+        prim_flags: prim_count,
+    }
+}
+
+/// Slices that will hold the tree. Their lengths set the capacities; any
+/// length from [`min_requirements`] up is accepted.
+pub struct KdStorage<'a> {
+    /// Nodes.
+    pub nodes: &'a mut [KdNode],
+    /// Leaf records.
+    pub leaves: &'a mut [KdLeaf],
+    /// Ropes and boxes, one per leaf record (at least as long as `leaves`).
+    pub ropes: &'a mut [KdRopes],
+    /// Primitive references.
+    pub refs: &'a mut [u32],
+}
+
+/// Scratch for one build; free again when the build returns.
+pub struct KdScratch<'s> {
+    /// Split events.
+    pub events: &'s mut [KdEvent],
+    /// One byte per primitive.
+    pub prim_flags: &'s mut [u8],
+}
+
+/// A built kd-tree borrowing its parts and the scene it was built on.
+/// Immutable: share it between threads.
+#[derive(Clone, Copy, Debug)]
+pub struct KdTree<'a> {
+    /// The primitives the references name.
+    pub scene: Scene<'a>,
+    /// Counts, bounds, scene fingerprint.
+    pub info: KdInfo,
+    /// `info.node_count` nodes; node 0 is the root.
+    pub nodes: &'a [KdNode],
+    /// `info.leaf_count` leaf records.
+    pub leaves: &'a [KdLeaf],
+    /// `info.leaf_count` rope records.
+    pub ropes: &'a [KdRopes],
+    /// `info.ref_count` references (global primitive indices).
+    pub refs: &'a [u32],
+}
+
+impl<'a> KdTree<'a> {
+    /// Reassembles a tree from parts read back from memory, with O(1) checks
+    /// (magic, version, counts within the slices, the scene's counts). Run
+    /// [`KdTree::validate`] on parts from untrusted storage before tracing.
+    pub fn from_parts(
+        scene: Scene<'a>,
+        info: KdInfo,
+        nodes: &'a [KdNode],
+        leaves: &'a [KdLeaf],
+        ropes: &'a [KdRopes],
+        refs: &'a [u32],
+    ) -> Result<KdTree<'a>, Error> {
+        if info.magic != KD_MAGIC {
+            return Err(Error::Corrupt { what: "magic" });
+        }
+        if info.version != KD_VERSION {
+            return Err(Error::Corrupt { what: "version" });
+        }
+        if info.node_count == 0
+            || info.node_count as usize > nodes.len()
+            || info.leaf_count as usize > leaves.len()
+            || info.leaf_count as usize > ropes.len()
+            || info.ref_count as usize > refs.len()
+            || info.depth > KD_MAX_DEPTH
+        {
+            return Err(Error::Corrupt { what: "counts" });
+        }
+        let tree = KdTree {
+            scene,
+            info,
+            nodes: &nodes[..info.node_count as usize],
+            leaves: &leaves[..info.leaf_count as usize],
+            ropes: &ropes[..info.leaf_count as usize],
+            refs: &refs[..info.ref_count as usize],
+        };
+        tree.check_scene(&scene)?;
+        Ok(tree)
+    }
+
+    /// Errors unless `scene` has the primitive counts this tree was built on.
+    pub fn check_scene(&self, scene: &Scene) -> Result<(), Error> {
+        let i = &self.info;
+        if scene.triangles.len() != i.triangle_count as usize
+            || scene.spheres.len() != i.sphere_count as usize
+            || scene.cones.len() != i.cone_count as usize
+        {
+            return Err(Error::SceneMismatch);
+        }
+        Ok(())
+    }
+}

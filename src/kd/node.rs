@@ -1,0 +1,159 @@
+//! The kd-tree's stored parts. Every type is plain data (`u32` and `f32`
+//! fields, `repr(C)`, no padding), so any bit pattern is a value: the C ABI
+//! may view a byte arena as these slices, and [`super::KdTree::validate`]
+//! decides whether the values make a tree.
+
+use crate::geom::Aabb;
+use glam::Vec3;
+
+/// "No node": a rope that leads out of the scene, an exit point with no node.
+pub const NO_NODE: u32 = u32::MAX;
+
+/// Deepest tree any build makes; traversal stacks are sized from it, so
+/// they cannot overflow.
+pub const KD_MAX_DEPTH: u32 = 60;
+
+/// One node in 8 bytes. `word & 3` is the split axis (0, 1, 2) or 3 for a
+/// leaf; `word >> 2` is the index of the left child (the right child follows
+/// it) or of the leaf record. `data` holds the split position's bits.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[repr(C)]
+pub struct KdNode {
+    /// Axis or leaf tag in the low two bits, child or leaf index above.
+    pub word: u32,
+    /// `f32::to_bits` of the split position (0 for a leaf).
+    pub data: u32,
+}
+
+impl KdNode {
+    /// An interior node splitting `axis` at `split`, children at `left` and `left + 1`.
+    pub fn interior(axis: usize, split: f32, left: u32) -> KdNode {
+        KdNode {
+            word: (left << 2) | axis as u32,
+            data: split.to_bits(),
+        }
+    }
+
+    /// A leaf whose primitives are in leaf record `leaf`.
+    pub fn leaf(leaf: u32) -> KdNode {
+        KdNode {
+            word: (leaf << 2) | 3,
+            data: 0,
+        }
+    }
+
+    /// True for a leaf.
+    #[inline]
+    pub fn is_leaf(&self) -> bool {
+        self.word & 3 == 3
+    }
+
+    /// Split axis of an interior node.
+    #[inline]
+    pub fn axis(&self) -> usize {
+        (self.word & 3) as usize
+    }
+
+    /// Left child (interior) or leaf record index (leaf).
+    #[inline]
+    pub fn index(&self) -> u32 {
+        self.word >> 2
+    }
+
+    /// Split position of an interior node.
+    #[inline]
+    pub fn split(&self) -> f32 {
+        f32::from_bits(self.data)
+    }
+}
+
+/// Where a leaf's primitive references are: `refs[first_ref..first_ref + ref_count]`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[repr(C)]
+pub struct KdLeaf {
+    /// First reference.
+    pub first_ref: u32,
+    /// Number of references (0 for an empty leaf).
+    pub ref_count: u32,
+}
+
+/// A leaf's box and its six ropes (Havran; Popov et al. 2007): for each face
+/// (order -x, +x, -y, +y, -z, +z) the smallest node whose region covers the
+/// whole face from outside, or [`NO_NODE`] on the scene's boundary.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C)]
+pub struct KdRopes {
+    /// Neighbour node per face.
+    pub neighbor: [u32; 6],
+    /// Lower corner of the leaf.
+    pub min: [f32; 3],
+    /// Upper corner of the leaf.
+    pub max: [f32; 3],
+}
+
+impl KdRopes {
+    /// The leaf's box.
+    #[inline]
+    pub fn bounds(&self) -> Aabb {
+        Aabb {
+            min: Vec3::from(self.min),
+            max: Vec3::from(self.max),
+        }
+    }
+}
+
+/// Magic word of a kd-tree's [`KdInfo`]: "CRKD".
+pub const KD_MAGIC: u32 = u32::from_le_bytes(*b"CRKD");
+/// Layout version of [`KdInfo`] and the node types.
+pub const KD_VERSION: u32 = 1;
+
+/// Flag in [`KdInfo::flags`]: a capacity stopped splitting somewhere.
+pub const KD_FLAG_TRUNCATED: u32 = 1;
+
+/// Everything about a built tree except its arrays: counts, bounds, the scene
+/// fingerprint. Plain data, so a byte arena can carry it as its header.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C)]
+pub struct KdInfo {
+    /// [`KD_MAGIC`].
+    pub magic: u32,
+    /// [`KD_VERSION`].
+    pub version: u32,
+    /// Triangles in the scene built on.
+    pub triangle_count: u32,
+    /// Spheres in the scene built on.
+    pub sphere_count: u32,
+    /// Cones in the scene built on.
+    pub cone_count: u32,
+    /// Primitives that are not degenerate (the ones in the tree).
+    pub valid_prim_count: u32,
+    /// Nodes used.
+    pub node_count: u32,
+    /// Leaves used (each has a [`KdLeaf`] and a [`KdRopes`]).
+    pub leaf_count: u32,
+    /// References used.
+    pub ref_count: u32,
+    /// Depth of the deepest leaf (root has depth 0).
+    pub depth: u32,
+    /// [`KD_FLAG_TRUNCATED`] and future flags.
+    pub flags: u32,
+    /// Lower corner of the root box.
+    pub bounds_min: [f32; 3],
+    /// Upper corner of the root box.
+    pub bounds_max: [f32; 3],
+}
+
+impl KdInfo {
+    /// Root box.
+    pub fn bounds(&self) -> Aabb {
+        Aabb {
+            min: Vec3::from(self.bounds_min),
+            max: Vec3::from(self.bounds_max),
+        }
+    }
+
+    /// True when a capacity made the build stop splitting early.
+    pub fn truncated(&self) -> bool {
+        self.flags & KD_FLAG_TRUNCATED != 0
+    }
+}

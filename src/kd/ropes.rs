@@ -1,0 +1,87 @@
+//! Ropes: six neighbour links per leaf, pushed down to the smallest node
+//! that still covers the whole face (Popov, Günther, Seidel and Slusallek
+//! 2007), so rope traversal descends little after crossing a face.
+
+use super::node::{KdNode, KdRopes, KD_MAX_DEPTH, NO_NODE};
+use crate::geom::Aabb;
+
+/// Moves rope `r` of face `face` of box `b` down while one child of the
+/// rope's node still covers the whole face.
+fn push_down(nodes: &[KdNode], mut r: u32, face: usize, b: &Aabb) -> u32 {
+    let face_axis = face / 2;
+    let positive = face % 2 == 1;
+    while r != NO_NODE {
+        let node = nodes[r as usize];
+        if node.is_leaf() {
+            break;
+        }
+        let (axis, split, left) = (node.axis(), node.split(), node.index());
+        r = if axis == face_axis {
+            // The neighbour lies beyond the face: its child on our side touches it.
+            if positive {
+                left
+            } else {
+                left + 1
+            }
+        } else if split <= b.min[axis] {
+            left + 1
+        } else if split >= b.max[axis] {
+            left
+        } else {
+            break;
+        };
+    }
+    r
+}
+
+/// Fills the neighbour links of every leaf record (boxes are already set).
+pub(super) fn build_ropes(nodes: &[KdNode], ropes: &mut [KdRopes], root: &Aabb) {
+    #[derive(Clone, Copy)]
+    struct Frame {
+        node: u32,
+        bounds: Aabb,
+        links: [u32; 6],
+    }
+    let mut stack = [Frame {
+        node: 0,
+        bounds: *root,
+        links: [NO_NODE; 6],
+    }; KD_MAX_DEPTH as usize + 2];
+    let mut sp = 1;
+    while sp > 0 {
+        sp -= 1;
+        let Frame {
+            node,
+            bounds,
+            mut links,
+        } = stack[sp];
+        for (face, l) in links.iter_mut().enumerate() {
+            *l = push_down(nodes, *l, face, &bounds);
+        }
+        let n = nodes[node as usize];
+        if n.is_leaf() {
+            ropes[n.index() as usize].neighbor = links;
+            continue;
+        }
+        let (axis, split, left) = (n.axis(), n.split(), n.index());
+        let mut lb = bounds;
+        lb.max[axis] = split;
+        let mut rb = bounds;
+        rb.min[axis] = split;
+        let mut ll = links;
+        ll[2 * axis + 1] = left + 1;
+        let mut rl = links;
+        rl[2 * axis] = left;
+        stack[sp] = Frame {
+            node: left + 1,
+            bounds: rb,
+            links: rl,
+        };
+        stack[sp + 1] = Frame {
+            node: left,
+            bounds: lb,
+            links: ll,
+        };
+        sp += 2;
+    }
+}

@@ -1,0 +1,225 @@
+//! Structural checks of a kd-tree, and the figures `coray stats` reports.
+//!
+//! The builder lays a tree out canonically: node pairs, leaf records and
+//! reference ranges are all numbered in depth-first preorder, left first.
+//! Checking that order proves, with no memory beyond a depth-bounded stack,
+//! that the nodes form one tree (no sharing, no cycle, nothing unreachable).
+
+use super::node::{KdNode, KD_MAX_DEPTH, NO_NODE};
+use super::KdTree;
+use crate::geom::Aabb;
+use crate::Error;
+
+/// What a valid tree looks like in numbers.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct KdTreeStats {
+    /// Nodes, interior and leaf.
+    pub nodes: u32,
+    /// Leaves.
+    pub leaves: u32,
+    /// Leaves with no primitive.
+    pub empty_leaves: u32,
+    /// Primitive references in leaves.
+    pub refs: u32,
+    /// Depth of the deepest leaf.
+    pub depth: u32,
+    /// SAH cost of the whole tree with the build's constants, relative to
+    /// the root's surface area: `sum(K_T * A(interior)) + sum(K_I * n * A(leaf))`, over `A(root)`.
+    pub sah_cost: f32,
+}
+
+fn corrupt(what: &'static str) -> Error {
+    Error::Corrupt { what }
+}
+
+/// Closed boxes overlap (touching counts).
+fn touches(a: &Aabb, b: &Aabb) -> bool {
+    (0..3).all(|i| a.min[i] <= b.max[i] && b.min[i] <= a.max[i])
+}
+
+impl<'a> KdTree<'a> {
+    /// Checks every structural invariant: one tree in canonical preorder,
+    /// splits strictly inside their node's box, depth within the recorded
+    /// depth, leaf records and reference ranges consecutive, every
+    /// reference naming a non-degenerate primitive that touches its leaf's
+    /// box, leaf boxes equal to the ones implied by the splits, and every
+    /// rope leading to a node whose box covers that face from outside.
+    /// Returns the tree's figures. `cost_traversal` and `cost_intersection`
+    /// weight the SAH cost in the figures.
+    pub fn validate_with_costs(
+        &self,
+        cost_traversal: f32,
+        cost_intersection: f32,
+    ) -> Result<KdTreeStats, Error> {
+        let info = &self.info;
+        let root = info.bounds();
+        let area64 = |b: &Aabb| {
+            let e = (b.max - b.min).as_dvec3();
+            2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
+        };
+        let root_area = area64(&root);
+        let mut st = KdTreeStats {
+            nodes: info.node_count,
+            ..KdTreeStats::default()
+        };
+        let mut stack = [(0u32, 0u32, Aabb::EMPTY); KD_MAX_DEPTH as usize + 2];
+        stack[0] = (0, 0, root);
+        let mut sp = 1;
+        let mut next_pair = 1u32;
+        let mut next_leaf = 0u32;
+        let mut next_ref = 0u32;
+        let mut sah = 0.0f64;
+        let prims = self.scene.prim_count();
+        while sp > 0 {
+            sp -= 1;
+            let (ni, depth, b) = stack[sp];
+            if depth > info.depth {
+                return Err(corrupt("depth"));
+            }
+            let nd = self.nodes[ni as usize];
+            let rel_area = if root_area > 0.0 && root_area.is_finite() {
+                area64(&b) / root_area
+            } else {
+                1.0
+            };
+            if nd.is_leaf() {
+                if nd.index() != next_leaf || nd.index() >= info.leaf_count {
+                    return Err(corrupt("leaf order"));
+                }
+                next_leaf += 1;
+                let l = self.leaves[nd.index() as usize];
+                if l.first_ref != next_ref
+                    || (l.first_ref as u64 + l.ref_count as u64) > info.ref_count as u64
+                {
+                    return Err(corrupt("reference range"));
+                }
+                next_ref += l.ref_count;
+                st.leaves += 1;
+                st.empty_leaves += (l.ref_count == 0) as u32;
+                st.refs += l.ref_count;
+                st.depth = st.depth.max(depth);
+                sah += cost_intersection as f64 * l.ref_count as f64 * rel_area;
+                let rp = &self.ropes[nd.index() as usize];
+                if rp.bounds() != b {
+                    return Err(corrupt("leaf box"));
+                }
+                for &p in &self.refs[l.first_ref as usize..(l.first_ref + l.ref_count) as usize] {
+                    if p as usize >= prims {
+                        return Err(corrupt("reference out of range"));
+                    }
+                    match self.scene.prim_bounds(p as usize) {
+                        Some(pb) if touches(&pb, &b) => {}
+                        _ => return Err(corrupt("reference outside its leaf")),
+                    }
+                }
+                for face in 0..6 {
+                    self.check_rope(rp.neighbor[face], face, &b)?;
+                }
+                continue;
+            }
+            let (a, s, left) = (nd.axis(), nd.split(), nd.index());
+            if left != next_pair || left as u64 + 1 >= info.node_count as u64 {
+                return Err(corrupt("node order"));
+            }
+            next_pair += 2;
+            if !(s > b.min[a] && s < b.max[a]) {
+                return Err(corrupt("split outside its node"));
+            }
+            if depth >= KD_MAX_DEPTH {
+                return Err(corrupt("depth"));
+            }
+            sah += cost_traversal as f64 * rel_area;
+            let mut lb = b;
+            lb.max[a] = s;
+            let mut rb = b;
+            rb.min[a] = s;
+            stack[sp] = (left + 1, depth + 1, rb);
+            stack[sp + 1] = (left, depth + 1, lb);
+            sp += 2;
+        }
+        if next_pair != info.node_count
+            || next_leaf != info.leaf_count
+            || next_ref != info.ref_count
+        {
+            return Err(corrupt("unreachable parts"));
+        }
+        if st.depth != info.depth {
+            return Err(corrupt("depth"));
+        }
+        st.sah_cost = sah as f32;
+        Ok(st)
+    }
+
+    /// [`KdTree::validate_with_costs`] with the default SAH constants.
+    pub fn validate(&self) -> Result<KdTreeStats, Error> {
+        let p = super::KdParams::auto();
+        self.validate_with_costs(p.cost_traversal, p.cost_intersection)
+    }
+
+    /// A rope of face `face` of leaf box `b` must be `NO_NODE` exactly when
+    /// the face lies on the root's boundary, and otherwise name a node on
+    /// the path from the root to the point just outside the face's centre,
+    /// whose box covers the face.
+    fn check_rope(&self, rope: u32, face: usize, b: &Aabb) -> Result<(), Error> {
+        let root = self.info.bounds();
+        let axis = face / 2;
+        let positive = face % 2 == 1;
+        let plane = if positive { b.max[axis] } else { b.min[axis] };
+        let on_boundary = if positive {
+            plane >= root.max[axis]
+        } else {
+            plane <= root.min[axis]
+        };
+        if rope == NO_NODE {
+            return if on_boundary {
+                Ok(())
+            } else {
+                Err(corrupt("missing rope"))
+            };
+        }
+        if on_boundary || rope >= self.info.node_count {
+            return Err(corrupt("rope out of the tree"));
+        }
+        let mut c = (b.min + b.max) * 0.5;
+        c[axis] = plane;
+        let mut node = 0u32;
+        let mut nb = root;
+        loop {
+            if node == rope {
+                let covers = (0..3).all(|i| {
+                    if i == axis {
+                        if positive {
+                            nb.min[i] == plane
+                        } else {
+                            nb.max[i] == plane
+                        }
+                    } else {
+                        nb.min[i] <= b.min[i] && nb.max[i] >= b.max[i]
+                    }
+                });
+                return if covers {
+                    Ok(())
+                } else {
+                    Err(corrupt("rope does not cover its face"))
+                };
+            }
+            let nd: KdNode = self.nodes[node as usize];
+            if nd.is_leaf() {
+                return Err(corrupt("rope not beside its face"));
+            }
+            let (a, s, left) = (nd.axis(), nd.split(), nd.index());
+            let go_right = if c[a] == s {
+                a == axis && positive
+            } else {
+                c[a] > s
+            };
+            if go_right {
+                nb.min[a] = s;
+                node = left + 1;
+            } else {
+                nb.max[a] = s;
+                node = left;
+            }
+        }
+    }
+}

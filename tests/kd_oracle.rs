@@ -1,0 +1,372 @@
+//! Every kd traversal against the brute-force oracle, on random and
+//! degenerate scenes.
+mod common;
+
+use common::*;
+use coray::kd::{self, KdParams, KdTree, Traversal};
+use coray::{oracle, Cone, Hit, Ray, Sphere, TraceStats, Vec3};
+
+const METHODS: [Traversal; 2] = [Traversal::Hierarchical, Traversal::Ropes];
+const PRESETS: [(&str, KdParams); 2] = [("paper", KdParams::paper()), ("auto", KdParams::auto())];
+
+/// Both miss, or both hit at the same t bit for bit (both call the same
+/// primitive test). The primitive may differ only in a tie: two primitives
+/// met at exactly this t.
+fn same(a: &Hit, b: &Hit) -> bool {
+    a.is_hit() == b.is_hit() && (!a.is_hit() || a.t == b.t)
+}
+
+/// Compares every method of `tree` with the oracle on `rays`; returns the
+/// number of hits seen (so callers can assert the test was not vacuous).
+fn check_all(tree: &KdTree, rays: &[Ray], what: &str) -> usize {
+    let scene = tree.scene;
+    let mut hits = 0;
+    for (i, ray) in rays.iter().enumerate() {
+        let want = oracle::intersect(&scene, ray);
+        let want_any = oracle::occluded(&scene, ray);
+        hits += want.is_hit() as usize;
+        for m in METHODS {
+            let mut st = TraceStats::default();
+            let got = tree.intersect(ray, m, &mut st);
+            assert!(
+                same(&got, &want),
+                "{what}: ray {i} {ray:?} {m:?}: got {got:?}, oracle {want:?}"
+            );
+            let any = tree.occluded(ray, m, &mut st);
+            assert_eq!(any, want_any, "{what}: ray {i} {ray:?} {m:?} occluded");
+            assert_eq!(st.rays, 2);
+            assert_eq!(st.traversal_steps, st.interior_steps + st.leaf_steps);
+        }
+    }
+    hits
+}
+
+fn check_scene(o: &OwnedScene, rays: &[Ray], what: &str) -> usize {
+    let scene = o.scene();
+    let mut hits = 0;
+    for (name, params) in PRESETS {
+        let (req, mut b) = ideal_storage(&scene, &params);
+        let tree = build_with(&scene, &params, &req, &mut b);
+        hits = check_all(&tree, rays, &format!("{what}/{name}"));
+    }
+    hits
+}
+
+#[test]
+fn random_mixed_scene_matches_oracle() {
+    let mut rng = Rng(1);
+    let o = random_scene(&mut rng, 1500, 300, 300, 10.0);
+    let rays = random_rays(&mut rng, 3000, 10.0);
+    let hits = check_scene(&o, &rays, "mixed");
+    assert!(hits > 500, "only {hits} hits: rays miss the scene");
+}
+
+#[test]
+fn many_seeds_small_scenes_match_oracle() {
+    for seed in 0..40 {
+        let mut rng = Rng(100 + seed);
+        let n = rng.below(60);
+        let (ns, nc) = (rng.below(20), rng.below(20));
+        let o = random_scene(&mut rng, n, ns, nc, 1.0);
+        let rays = random_rays(&mut rng, 300, 1.0);
+        check_scene(&o, &rays, &format!("seed {seed}"));
+    }
+}
+
+#[test]
+fn empty_scene_misses_everything() {
+    let o = OwnedScene::default();
+    let mut rng = Rng(2);
+    let rays = random_rays(&mut rng, 50, 1.0);
+    assert_eq!(check_scene(&o, &rays, "empty"), 0);
+}
+
+#[test]
+fn one_primitive_of_each_kind() {
+    let mut rng = Rng(3);
+    let rays = random_rays(&mut rng, 2000, 1.0);
+    let mut t = OwnedScene::default();
+    t.add_triangle(
+        Vec3::new(-1.0, -1.0, 0.0),
+        Vec3::new(1.0, -1.0, 0.0),
+        Vec3::new(0.0, 1.0, 0.0),
+    );
+    assert!(check_scene(&t, &rays, "one triangle") > 0);
+    let s = OwnedScene {
+        spheres: vec![Sphere {
+            center: [0.0; 3],
+            radius: 0.5,
+        }],
+        ..Default::default()
+    };
+    assert!(check_scene(&s, &rays, "one sphere") > 0);
+    let c = OwnedScene {
+        cones: vec![Cone {
+            base: [0.0, -0.5, 0.0],
+            base_radius: 0.5,
+            apex: [0.0, 0.5, 0.0],
+            apex_radius: 0.1,
+        }],
+        ..Default::default()
+    };
+    assert!(check_scene(&c, &rays, "one cone") > 0);
+}
+
+#[test]
+fn coincident_primitives() {
+    let mut o = OwnedScene::default();
+    for _ in 0..50 {
+        o.add_triangle(
+            Vec3::new(-1.0, -1.0, 0.2),
+            Vec3::new(1.0, -1.0, 0.0),
+            Vec3::new(0.0, 1.0, -0.2),
+        );
+        o.spheres.push(Sphere {
+            center: [0.3, 0.1, 0.0],
+            radius: 0.4,
+        });
+    }
+    let mut rng = Rng(4);
+    let rays = random_rays(&mut rng, 1000, 1.0);
+    assert!(check_scene(&o, &rays, "coincident") > 100);
+}
+
+#[test]
+fn huge_and_tiny_coordinates() {
+    for scale in [1e10f32, 1e-10, 1.0] {
+        let mut rng = Rng(5);
+        let o = random_scene(&mut rng, 300, 50, 50, scale);
+        let rays = random_rays(&mut rng, 800, scale);
+        let hits = check_scene(&o, &rays, &format!("scale {scale}"));
+        println!("scale {scale}: {hits} hits");
+        assert!(hits > 100, "scale {scale}: {hits} hits");
+    }
+}
+
+/// A grid of axis-aligned quads on integer planes: the SAH puts split
+/// planes exactly there, and axis-parallel rays on integer coordinates lie
+/// in those planes or cross them at shared edges.
+#[test]
+fn axis_parallel_rays_on_split_planes() {
+    let mut o = OwnedScene::default();
+    for i in 0..6 {
+        for axis in 0..3 {
+            let p = i as f32;
+            o.add_quad(axis, p, [0.0, 0.0], [p.max(1.0), 5.0 - p]);
+        }
+    }
+    o.spheres.push(Sphere {
+        center: [2.0, 2.0, 2.0],
+        radius: 1.0,
+    });
+    let mut rays = Vec::new();
+    for axis in 0..3 {
+        for sign in [-1.0f32, 1.0] {
+            for a in 0..=5 {
+                for b in 0..=5 {
+                    let mut org = Vec3::splat(-2.0);
+                    org[axis] = if sign > 0.0 { -2.0 } else { 8.0 };
+                    org[(axis + 1) % 3] = a as f32;
+                    org[(axis + 2) % 3] = b as f32;
+                    let mut d = Vec3::ZERO;
+                    d[axis] = sign;
+                    rays.push(Ray::new(org, d, 0.0, f32::INFINITY));
+                    // Half-integer offsets: inside cells, still axis-parallel.
+                    let mut org2 = org;
+                    org2[(axis + 1) % 3] += 0.5;
+                    rays.push(Ray::new(org2, d, 0.0, f32::INFINITY));
+                }
+            }
+        }
+    }
+    assert!(check_scene(&o, &rays, "axis-parallel") > 100);
+}
+
+#[test]
+fn invalid_rays_hit_nothing() {
+    let mut rng = Rng(6);
+    let o = random_scene(&mut rng, 200, 20, 20, 1.0);
+    let nan = f32::NAN;
+    let rays = [
+        Ray::new(Vec3::ZERO, Vec3::ZERO, 0.0, f32::INFINITY),
+        Ray::new(Vec3::ZERO, Vec3::new(nan, 1.0, 0.0), 0.0, f32::INFINITY),
+        Ray::new(Vec3::new(nan, 0.0, 0.0), Vec3::X, 0.0, f32::INFINITY),
+        Ray::new(Vec3::ZERO, Vec3::X, nan, f32::INFINITY),
+        Ray::new(Vec3::ZERO, Vec3::X, 1.0, 0.5),
+        Ray::new(Vec3::splat(f32::INFINITY), Vec3::X, 0.0, 1.0),
+    ];
+    let scene = o.scene();
+    let params = KdParams::auto();
+    let (req, mut b) = ideal_storage(&scene, &params);
+    let tree = build_with(&scene, &params, &req, &mut b);
+    for r in &rays {
+        for m in METHODS {
+            let mut st = TraceStats::default();
+            assert!(!tree.intersect(r, m, &mut st).is_hit());
+            assert!(!tree.occluded(r, m, &mut st));
+        }
+    }
+}
+
+#[test]
+fn degenerate_primitives_are_never_hit() {
+    let mut o = OwnedScene::default();
+    // Zero area, NaN, infinite.
+    o.add_triangle(Vec3::ZERO, Vec3::X, Vec3::X * 2.0);
+    o.add_triangle(Vec3::ZERO, Vec3::new(f32::NAN, 0.0, 0.0), Vec3::Y);
+    o.add_triangle(Vec3::ZERO, Vec3::new(f32::INFINITY, 0.0, 0.0), Vec3::Y);
+    o.spheres.push(Sphere {
+        center: [0.0; 3],
+        radius: 0.0,
+    });
+    o.spheres.push(Sphere {
+        center: [0.0; 3],
+        radius: -1.0,
+    });
+    o.spheres.push(Sphere {
+        center: [f32::NAN, 0.0, 0.0],
+        radius: 1.0,
+    });
+    o.cones.push(Cone {
+        base: [0.0; 3],
+        base_radius: 1.0,
+        apex: [0.0; 3],
+        apex_radius: 1.0,
+    });
+    o.cones.push(Cone {
+        base: [0.0; 3],
+        base_radius: 0.0,
+        apex: [0.0, 1.0, 0.0],
+        apex_radius: 0.0,
+    });
+    o.cones.push(Cone {
+        base: [0.0; 3],
+        base_radius: -1.0,
+        apex: [0.0, 1.0, 0.0],
+        apex_radius: 1.0,
+    });
+    // One real sphere so the tree is not empty.
+    o.spheres.push(Sphere {
+        center: [5.0, 0.0, 0.0],
+        radius: 1.0,
+    });
+    let scene = o.scene();
+    for p in 0..scene.prim_count() {
+        // Global index 6 is the real sphere (3 triangles, then spheres).
+        assert_eq!(scene.prim_bounds(p).is_none(), p != 6, "primitive {p}");
+    }
+    let mut rng = Rng(7);
+    let mut rays = random_rays(&mut rng, 500, 2.0);
+    rays.push(Ray::new(
+        Vec3::new(-3.0, 0.0, 0.0),
+        Vec3::X,
+        0.0,
+        f32::INFINITY,
+    ));
+    for (name, params) in PRESETS {
+        let (req, mut b) = ideal_storage(&scene, &params);
+        let tree = build_with(&scene, &params, &req, &mut b);
+        assert_eq!(tree.info.valid_prim_count, 1, "{name}");
+        check_all(&tree, &rays, name);
+        let h = tree.intersect(
+            rays.last().unwrap(),
+            Traversal::Hierarchical,
+            &mut TraceStats::default(),
+        );
+        assert_eq!((h.geom_id, h.prim_id, h.t), (1, 3, 7.0));
+    }
+}
+
+/// Exactly the minimum succeeds; one element less in any slice fails with
+/// the count needed; less than the ideal room truncates but stays exact.
+#[test]
+fn exact_fit_and_one_less() {
+    let mut rng = Rng(8);
+    let random_n = 5 + rng.below(500);
+    for n in [0usize, 1, 2, 3, 7, 1000, random_n] {
+        let o = random_scene(&mut rng, n - n / 3, n / 3 - n / 6, n / 6, 1.0);
+        let scene = o.scene();
+        assert_eq!(scene.prim_count(), n);
+        let rays = random_rays(&mut rng, 200, 1.0);
+        let params = KdParams::paper();
+        let min = kd::min_requirements(n);
+        let (mut b, _, _) = storage_for(&min);
+        let tree = build_with(&scene, &params, &min, &mut b);
+        assert_eq!(tree.info.node_count, 1);
+        if n > params.leaf_size as usize {
+            assert!(
+                tree.info.truncated(),
+                "n={n}: minimum room must stop at the root and say so"
+            );
+        }
+        check_all(&tree, &rays, &format!("min n={n}"));
+        for field in 0..6 {
+            let mut less = min;
+            let slot = match field {
+                0 => &mut less.nodes,
+                1 => &mut less.leaves,
+                2 => &mut less.ropes,
+                3 => &mut less.refs,
+                4 => &mut less.events,
+                _ => &mut less.prim_flags,
+            };
+            if *slot == 0 {
+                continue;
+            }
+            *slot -= 1;
+            let (mut b, mut ev, mut fl) = storage_for(&less);
+            let r = kd::build_sah(
+                &scene,
+                &params,
+                kd::KdStorage {
+                    nodes: &mut b.nodes,
+                    leaves: &mut b.leaves,
+                    ropes: &mut b.ropes,
+                    refs: &mut b.refs,
+                },
+                kd::KdScratch {
+                    events: &mut ev,
+                    prim_flags: &mut fl,
+                },
+            );
+            match r {
+                Err(coray::Error::SliceTooSmall { needed, got, .. }) => assert_eq!(needed, got + 1),
+                other => panic!("n={n} field {field}: expected SliceTooSmall, got {other:?}"),
+            }
+        }
+        // Halfway between minimum and ideal: may truncate, must stay exact.
+        let ideal = kd::requirements(n, &params);
+        let half = kd::KdRequirements {
+            nodes: (ideal.nodes / 8).max(1),
+            leaves: (ideal.leaves / 8).max(1),
+            ropes: (ideal.ropes / 8).max(1),
+            refs: (ideal.refs / 3).max(n),
+            events: (ideal.events / 3).max(6 * n),
+            prim_flags: n,
+        };
+        let (mut b, _, _) = storage_for(&half);
+        let tree = build_with(&scene, &params, &half, &mut b);
+        check_all(&tree, &rays, &format!("half n={n}"));
+        let (mut b, _, _) = storage_for(&ideal);
+        let tree = build_with(&scene, &params, &ideal, &mut b);
+        check_all(&tree, &rays, &format!("ideal n={n}"));
+    }
+}
+
+#[test]
+fn paper_preset_respects_its_limits() {
+    let mut rng = Rng(9);
+    let o = random_scene(&mut rng, 4000, 0, 0, 10.0);
+    let scene = o.scene();
+    let params = KdParams::paper();
+    let (req, mut b) = ideal_storage(&scene, &params);
+    let tree = build_with(&scene, &params, &req, &mut b);
+    assert!(!tree.info.truncated());
+    assert!(tree.info.depth <= 16);
+    let st = tree.validate().unwrap();
+    assert!(
+        st.leaves > 1000,
+        "a 4000-triangle scene should split deeply, got {} leaves",
+        st.leaves
+    );
+}
