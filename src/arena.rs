@@ -41,7 +41,7 @@ pub struct KdArenaLayout {
 impl KdArenaLayout {
     /// Layout of the tree part (nodes, leaves, ropes, refs) of `counts`.
     pub fn of(counts: &KdRequirements) -> KdArenaLayout {
-        const _: () = assert!(size_of::<KdInfo>() <= KD_HEADER_BYTES);
+        const _: () = assert!(size_of::<KdArenaHeader>() <= KD_HEADER_BYTES);
         let nodes_offset = KD_HEADER_BYTES;
         let leaves_offset = nodes_offset + align_up(counts.nodes * size_of::<KdNode>());
         let ropes_offset = leaves_offset + align_up(counts.leaves * size_of::<KdLeaf>());
@@ -120,5 +120,85 @@ impl KdScratchLayout {
             events_offset,
             events,
         })
+    }
+}
+
+/// The header at the start of a kd-tree arena: the tree's [`KdInfo`] and
+/// where its parts lie. Offsets, never pointers: the arena is relocatable.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C)]
+pub struct KdArenaHeader {
+    /// Counts, bounds, scene fingerprint, magic and version.
+    pub info: KdInfo,
+    /// Bytes of the arena the layout covers.
+    pub layout_bytes: u32,
+    /// Capacity of the node part.
+    pub nodes_cap: u32,
+    /// Capacity of the leaf and rope parts.
+    pub leaves_cap: u32,
+    /// Capacity of the reference part.
+    pub refs_cap: u32,
+    /// Byte offset of the nodes.
+    pub nodes_offset: u32,
+    /// Byte offset of the leaf records.
+    pub leaves_offset: u32,
+    /// Byte offset of the ropes.
+    pub ropes_offset: u32,
+    /// Byte offset of the references.
+    pub refs_offset: u32,
+}
+
+impl KdArenaHeader {
+    /// The header describing `layout` for a tree with `info`.
+    pub fn new(info: KdInfo, layout: &KdArenaLayout) -> KdArenaHeader {
+        let c = &layout.counts;
+        KdArenaHeader {
+            info,
+            layout_bytes: layout.total_bytes as u32,
+            nodes_cap: c.nodes as u32,
+            leaves_cap: c.leaves as u32,
+            refs_cap: c.refs as u32,
+            nodes_offset: layout.nodes_offset as u32,
+            leaves_offset: layout.leaves_offset as u32,
+            ropes_offset: layout.ropes_offset as u32,
+            refs_offset: layout.refs_offset as u32,
+        }
+    }
+
+    /// The layout this header claims, if it is the one the formulas give
+    /// for its capacities, fits in `arena_bytes`, and the counts in its
+    /// info fit the capacities. O(1): the tree itself is checked by
+    /// [`crate::kd::KdTree::validate`].
+    pub fn layout(&self, arena_bytes: usize) -> Result<KdArenaLayout, crate::Error> {
+        let corrupt = |what| Err(crate::Error::Corrupt { what });
+        if self.info.magic != crate::kd::KD_MAGIC {
+            return corrupt("magic");
+        }
+        if self.info.version != crate::kd::KD_VERSION {
+            return corrupt("version");
+        }
+        let counts = KdRequirements {
+            nodes: self.nodes_cap as usize,
+            leaves: self.leaves_cap as usize,
+            ropes: self.leaves_cap as usize,
+            refs: self.refs_cap as usize,
+            events: 0,
+            prim_flags: 0,
+        };
+        let layout = KdArenaLayout::of(&counts);
+        if KdArenaHeader::new(self.info, &layout) != *self {
+            return corrupt("layout");
+        }
+        if layout.total_bytes > arena_bytes {
+            return corrupt("arena shorter than its layout");
+        }
+        let i = &self.info;
+        if i.node_count > self.nodes_cap
+            || i.leaf_count > self.leaves_cap
+            || i.ref_count > self.refs_cap
+        {
+            return corrupt("counts");
+        }
+        Ok(layout)
     }
 }

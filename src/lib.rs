@@ -24,5 +24,5 @@ pub mod oracle;
 pub mod stats;
 
 pub use error::Error;
-pub use geom::{Aabb, Cone, Hit, Ray, Scene, Sphere, Vec3};
+pub use geom::{Aabb, Camera, Cone, Hit, Ray, Scene, Sphere, Vec3};
 pub use stats::TraceStats;

@@ -64,14 +64,17 @@ impl Cone {
         }
         let w = axis / len;
         let slope = (self.apex_radius - self.base_radius) / len;
-        // Work in units of the axis length along a unit direction, so that
-        // the squared terms below neither underflow nor overflow at any
-        // scale of scene or ray; `to_t` maps the root back to the ray's t.
+        // Work in units of the axis length along a unit direction, from the
+        // point of the ray nearest the cone's centre: the squared terms below
+        // then neither underflow nor overflow at any scale, and the
+        // discriminant does not cancel for a ray passing far from its origin
+        // (the same move as Ray Tracing Gems ch. 7 for spheres).
         let inv_len = 1.0 / len;
         let dir_len = r.dir.length();
-        let to_t = len / dir_len;
-        let q = (r.origin - b) * inv_len;
         let d = r.dir / dir_len;
+        let center = b + axis * 0.5;
+        let shift = (center - r.origin).dot(d);
+        let q = (r.origin + d * shift - b) * inv_len;
         let qs = q.dot(w);
         let ds = d.dot(w);
         let qp = q - w * qs;
@@ -99,7 +102,7 @@ impl Cone {
             core::mem::swap(&mut t0, &mut t1);
         }
         for u in [t0, t1] {
-            let t = u * to_t;
+            let t = (shift + u * len) / dir_len;
             if !(t >= r.t_min && t <= t_max) {
                 continue;
             }

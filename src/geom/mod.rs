@@ -1,6 +1,7 @@
 //! Geometry: rays, boxes, the three primitive kinds and the scene that holds them.
 
 mod aabb;
+mod camera;
 mod cone;
 mod ray;
 mod scene;
@@ -8,6 +9,7 @@ mod sphere;
 mod triangle;
 
 pub use aabb::Aabb;
+pub use camera::Camera;
 pub use cone::Cone;
 pub use glam::Vec3;
 pub use ray::{Hit, PreparedRay, Ray, INVALID_ID};

@@ -157,9 +157,9 @@ impl<'a> KdTree<'a> {
     }
 
     /// A rope of face `face` of leaf box `b` must be `NO_NODE` exactly when
-    /// the face lies on the root's boundary, and otherwise name a node on
-    /// the path from the root to the point just outside the face's centre,
-    /// whose box covers the face.
+    /// the face lies on the root's boundary, and otherwise name a node met
+    /// on the way from the root towards the region just outside the face,
+    /// before any split cuts that face, and whose box covers the face.
     fn check_rope(&self, rope: u32, face: usize, b: &Aabb) -> Result<(), Error> {
         let root = self.info.bounds();
         let axis = face / 2;
@@ -180,19 +180,13 @@ impl<'a> KdTree<'a> {
         if on_boundary || rope >= self.info.node_count {
             return Err(corrupt("rope out of the tree"));
         }
-        let mut c = (b.min + b.max) * 0.5;
-        c[axis] = plane;
         let mut node = 0u32;
         let mut nb = root;
         loop {
             if node == rope {
                 let covers = (0..3).all(|i| {
                     if i == axis {
-                        if positive {
-                            nb.min[i] == plane
-                        } else {
-                            nb.max[i] == plane
-                        }
+                        nb.min[i] <= plane && plane <= nb.max[i]
                     } else {
                         nb.min[i] <= b.min[i] && nb.max[i] >= b.max[i]
                     }
@@ -208,10 +202,20 @@ impl<'a> KdTree<'a> {
                 return Err(corrupt("rope not beside its face"));
             }
             let (a, s, left) = (nd.axis(), nd.split(), nd.index());
-            let go_right = if c[a] == s {
-                a == axis && positive
+            // Which side holds the region beyond the face (the whole face,
+            // or the rope should have stopped above this split).
+            let go_right = if a == axis {
+                if positive {
+                    plane >= s
+                } else {
+                    plane > s
+                }
+            } else if b.min[a] >= s {
+                true
+            } else if b.max[a] <= s {
+                false
             } else {
-                c[a] > s
+                return Err(corrupt("rope below a split that cuts its face"));
             };
             if go_right {
                 nb.min[a] = s;
