@@ -1,0 +1,75 @@
+/* No byte outside the given arenas and output arrays is written: each sits
+ * between guard zones of a known pattern, which must survive build and trace.
+ * Inside the tree arena, nothing past the layout's used bytes is written either. */
+#include "common.h"
+
+#define GUARD 4096
+#define PATTERN 0xA5
+
+static unsigned char *guarded(size_t bytes) {
+    unsigned char *p = arena_alloc(bytes + 2 * GUARD);
+    memset(p, PATTERN, bytes + 2 * GUARD);
+    return p + GUARD; /* GUARD is a multiple of 16: still aligned */
+}
+static int intact(const unsigned char *p, size_t from, size_t to) {
+    size_t i;
+    for (i = from; i < to; i++)
+        if (p[i] != PATTERN) return 0;
+    return 1;
+}
+static int guards_intact(unsigned char *user, size_t bytes) {
+    return intact(user - GUARD, 0, GUARD) && intact(user + bytes, 0, GUARD);
+}
+
+int main(void) {
+    TestScene ts;
+    size_t n, nr = 4000, k;
+    uint32_t preset;
+    CorayRay *rays;
+    rng_state = 13;
+    ts = scene_random(1000, 200, 200, 1.0f);
+    n = ts.nt + ts.ns + ts.nc;
+    rays = malloc(sizeof(CorayRay) * nr);
+    rays_random(rays, nr, 1.0f);
+    for (preset = 0; preset < 2; preset++) {
+        CorayKdParams p = coray_kd_params_default(preset);
+        CorayKdRequirements req;
+        CorayKdTreeInfo info;
+        size_t sizes[3];
+        CHECK_STATUS(coray_kdtree_requirements(n, &p, &req), CORAY_STATUS_OK);
+        sizes[0] = req.tree_bytes;
+        sizes[1] = (req.tree_min_bytes + req.tree_bytes) / 2 + 3;
+        sizes[2] = req.tree_min_bytes;
+        for (k = 0; k < 3; k++) {
+            unsigned char *tree = guarded(sizes[k]);
+            unsigned char *scratch = guarded(req.scratch_bytes);
+            unsigned char *hits = guarded(sizeof(CorayHit) * nr);
+            unsigned char *occ = guarded(nr);
+            unsigned char *stats = guarded(sizeof(CorayTraceStats));
+            CHECK_STATUS(coray_kdtree_build(&ts.view, &p, tree, sizes[k], scratch, req.scratch_bytes, NULL), CORAY_STATUS_OK);
+            CHECK_STATUS(coray_kdtree_info(tree, sizes[k], &info), CORAY_STATUS_OK);
+            CHECK(info.arena_bytes_used <= sizes[k]);
+            CHECK(intact(tree, info.arena_bytes_used, sizes[k]));
+            CHECK_STATUS(coray_kdtree_intersect(tree, sizes[k], &ts.view, 0, rays, (CorayHit *)hits, nr, (CorayTraceStats *)stats), CORAY_STATUS_OK);
+            CHECK_STATUS(coray_kdtree_intersect(tree, sizes[k], &ts.view, 1, rays, (CorayHit *)hits, nr, (CorayTraceStats *)stats), CORAY_STATUS_OK);
+            CHECK_STATUS(coray_kdtree_occluded(tree, sizes[k], &ts.view, 1, rays, occ, nr, (CorayTraceStats *)stats), CORAY_STATUS_OK);
+            CHECK(guards_intact(tree, sizes[k]));
+            CHECK(guards_intact(scratch, req.scratch_bytes));
+            CHECK(guards_intact(hits, sizeof(CorayHit) * nr));
+            CHECK(guards_intact(occ, nr));
+            CHECK(guards_intact(stats, sizeof(CorayTraceStats)));
+            /* A failing build writes nothing at all. */
+            memset(tree, PATTERN, sizes[k]);
+            CHECK_STATUS(coray_kdtree_build(&ts.view, &p, tree, req.tree_min_bytes - 1, scratch, req.scratch_bytes, NULL), CORAY_STATUS_ARENA_TOO_SMALL);
+            CHECK(intact(tree, 0, sizes[k]));
+            free(tree - GUARD);
+            free(scratch - GUARD);
+            free(hits - GUARD);
+            free(occ - GUARD);
+            free(stats - GUARD);
+        }
+    }
+    free(rays);
+    scene_free(&ts);
+    return finish("canary");
+}

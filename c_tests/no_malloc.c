@@ -1,0 +1,102 @@
+/* coray never allocates: count malloc, calloc, realloc and free (and their
+ * aligned cousins) while building and tracing; the count must be 0. This
+ * program interposes the allocator for the whole process, Rust std included. */
+#include <stddef.h>
+
+extern void *__libc_malloc(size_t);
+extern void *__libc_calloc(size_t, size_t);
+extern void *__libc_realloc(void *, size_t);
+extern void __libc_free(void *);
+extern void *__libc_memalign(size_t, size_t);
+
+static volatile int counting = 0;
+static volatile long alloc_calls = 0;
+
+void *malloc(size_t n) {
+    if (counting) alloc_calls++;
+    return __libc_malloc(n);
+}
+void *calloc(size_t a, size_t b) {
+    if (counting) alloc_calls++;
+    return __libc_calloc(a, b);
+}
+void *realloc(void *p, size_t n) {
+    if (counting) alloc_calls++;
+    return __libc_realloc(p, n);
+}
+void free(void *p) {
+    if (counting) alloc_calls++;
+    __libc_free(p);
+}
+int posix_memalign(void **out, size_t align, size_t n) {
+    if (counting) alloc_calls++;
+    *out = __libc_memalign(align, n);
+    return *out ? 0 : 12;
+}
+void *aligned_alloc(size_t align, size_t n) {
+    if (counting) alloc_calls++;
+    return __libc_memalign(align, n);
+}
+void *memalign(size_t align, size_t n) {
+    if (counting) alloc_calls++;
+    return __libc_memalign(align, n);
+}
+
+#include "common.h"
+
+int main(void) {
+    TestScene ts;
+    CorayKdRequirements req;
+    void *arena, *scratch;
+    CorayRay *rays;
+    CorayHit *hits;
+    uint8_t *occ;
+    CorayTraceStats st;
+    CorayKdTreeStats tst;
+    size_t n, nr = 20000;
+    uint32_t preset, trav;
+    long probe;
+
+    rng_state = 12;
+    ts = scene_random(3000, 500, 500, 1.0f);
+    n = ts.nt + ts.ns + ts.nc;
+    rays = malloc(sizeof(CorayRay) * nr);
+    hits = malloc(sizeof(CorayHit) * nr);
+    occ = malloc(nr);
+    rays_random(rays, nr, 1.0f);
+
+    /* The counter works: one malloc while counting is seen. */
+    counting = 1;
+    free(malloc(16));
+    counting = 0;
+    probe = alloc_calls;
+    CHECK(probe == 2);
+    alloc_calls = 0;
+
+    for (preset = 0; preset < 2; preset++) {
+        CorayKdParams p = coray_kd_params_default(preset);
+        CHECK_STATUS(coray_kdtree_requirements(n, &p, &req), CORAY_STATUS_OK);
+        arena = arena_alloc(req.tree_bytes);
+        scratch = arena_alloc(req.scratch_bytes);
+        counting = 1;
+        CHECK_STATUS(coray_kdtree_build(&ts.view, &p, arena, req.tree_bytes, scratch, req.scratch_bytes, NULL), CORAY_STATUS_OK);
+        CHECK_STATUS(coray_kdtree_validate(arena, req.tree_bytes, &ts.view, &tst), CORAY_STATUS_OK);
+        for (trav = 0; trav < 2; trav++) {
+            CHECK_STATUS(coray_kdtree_intersect(arena, req.tree_bytes, &ts.view, trav, rays, hits, nr, &st), CORAY_STATUS_OK);
+            CHECK_STATUS(coray_kdtree_occluded(arena, req.tree_bytes, &ts.view, trav, rays, occ, nr, &st), CORAY_STATUS_OK);
+            CHECK_STATUS(coray_kdtree_intersect1(arena, req.tree_bytes, &ts.view, trav, rays, hits, &st), CORAY_STATUS_OK);
+        }
+        /* Error paths too. */
+        CHECK_STATUS(coray_kdtree_intersect(arena, 10, &ts.view, 0, rays, hits, nr, &st), CORAY_STATUS_CORRUPT_ARENA);
+        counting = 0;
+        printf("preset %u: %ld allocator calls during build, validate and %zu x 5 traces\n", preset, alloc_calls, nr);
+        CHECK(alloc_calls == 0);
+        free(arena);
+        free(scratch);
+    }
+    free(rays);
+    free(hits);
+    free(occ);
+    scene_free(&ts);
+    return finish("no_malloc");
+}
