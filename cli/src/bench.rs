@@ -1,0 +1,405 @@
+//! `coray bench`: every method on the same primary and shadow rays, one
+//! thread, side by side in one run. Figures are ratios to the kd-tree's
+//! hierarchical traversal (alpha for traversal steps, eta for time) and to
+//! Embree when it is in the run.
+
+use crate::scene::SceneData;
+use coray::arena::KdArenaLayout;
+use coray::kd::{
+    self, KdEvent, KdLeaf, KdNode, KdParams, KdRequirements, KdRopes, KdScratch, KdStorage,
+    Traversal,
+};
+use coray::{Hit, Ray, TraceStats};
+use std::time::Instant;
+
+/// One benchmarked method's figures.
+#[derive(Clone, Debug, Default)]
+pub struct Row {
+    pub method: String,
+    pub build_ms: f64,
+    /// Bytes of the structure (None where it is not ours to measure).
+    pub arena_bytes: Option<usize>,
+    pub primary_s: f64,
+    pub shadow_s: f64,
+    pub primary_rays: usize,
+    pub shadow_rays: usize,
+    /// Traversal steps per primary ray (None for Embree).
+    pub tspr: Option<f64>,
+    pub isect_per_ray: Option<f64>,
+    pub mismatches: usize,
+    pub truncated: bool,
+}
+
+impl Row {
+    pub fn primary_mrays(&self) -> f64 {
+        self.primary_rays as f64 / self.primary_s / 1e6
+    }
+    pub fn shadow_mrays(&self) -> f64 {
+        self.shadow_rays as f64 / self.shadow_s / 1e6
+    }
+}
+
+/// Camera rays through every pixel and one shadow ray per hit per light,
+/// all with unit directions (Embree's cones need them, see coray-embree).
+pub fn shadow_rays(s: &SceneData, reference: &[Hit]) -> Vec<Ray> {
+    let mut shadow = Vec::new();
+    let primary = primary_rays(s);
+    for (r, h) in primary.iter().zip(reference) {
+        if !h.is_hit() {
+            continue;
+        }
+        let p = r.origin + r.dir * h.t;
+        for l in &s.lights {
+            let d = *l - p;
+            let len = d.length();
+            if len > 0.0 {
+                shadow.push(Ray::new(p, d / len, 1e-4 * len.max(1.0), len));
+            }
+        }
+    }
+    shadow
+}
+
+pub fn primary_rays(s: &SceneData) -> Vec<Ray> {
+    let c = &s.camera;
+    let (f, r, u) = c.basis();
+    let mut rays = Vec::with_capacity((c.width * c.height) as usize);
+    for y in 0..c.height {
+        for x in 0..c.width {
+            let ray = c.ray_in(f, r, u, x as f32 + 0.5, y as f32 + 0.5);
+            rays.push(Ray::new(
+                ray.origin,
+                ray.dir.normalize(),
+                0.0,
+                f32::INFINITY,
+            ));
+        }
+    }
+    rays
+}
+
+/// Best of `repeat` timed runs of `f` (the machine is shared: the minimum
+/// is the least disturbed run).
+fn best_of<T>(repeat: usize, mut f: impl FnMut() -> T) -> (f64, T) {
+    let mut best = f64::INFINITY;
+    let mut out = None;
+    for _ in 0..repeat.max(1) {
+        let t = Instant::now();
+        let v = f();
+        best = best.min(t.elapsed().as_secs_f64());
+        out = Some(v);
+    }
+    (best, out.unwrap())
+}
+
+fn same_hit(a: &Hit, b: &Hit) -> bool {
+    a.is_hit() == b.is_hit()
+        && (!a.is_hit()
+            || ((a.geom_id, a.prim_id) == (b.geom_id, b.prim_id) || a.t == b.t)
+                && (a.t - b.t).abs() <= 1e-4 * a.t.abs().max(1.0))
+}
+
+/// Results of one method on the workload, for comparison.
+pub struct Traced {
+    pub row: Row,
+    pub hits: Vec<Hit>,
+    pub shadowed: Vec<bool>,
+}
+
+/// Builds a kd-tree with `params` and traces the workload with `method`.
+pub fn run_kd(
+    s: &SceneData,
+    params: &KdParams,
+    method: Traversal,
+    name: &str,
+    primary: &[Ray],
+    shadow: &[Ray],
+    repeat: usize,
+) -> Traced {
+    let scene = s.scene();
+    let req: KdRequirements = kd::requirements(scene.prim_count(), params);
+    let mut nodes = vec![KdNode::default(); req.nodes];
+    let mut leaves = vec![KdLeaf::default(); req.leaves];
+    let mut ropes = vec![KdRopes::default(); req.ropes];
+    let mut refs = vec![0u32; req.refs];
+    let mut events = vec![KdEvent::default(); req.events];
+    let mut flags = vec![0u8; req.prim_flags];
+    let t = Instant::now();
+    let tree = kd::build_sah(
+        &scene,
+        params,
+        KdStorage {
+            nodes: &mut nodes,
+            leaves: &mut leaves,
+            ropes: &mut ropes,
+            refs: &mut refs,
+        },
+        KdScratch {
+            events: &mut events,
+            prim_flags: &mut flags,
+        },
+    )
+    .expect("kd build");
+    let build_ms = t.elapsed().as_secs_f64() * 1e3;
+    let i = &tree.info;
+    let used = KdArenaLayout::of(&KdRequirements {
+        nodes: i.node_count as usize,
+        leaves: i.leaf_count as usize,
+        ropes: i.leaf_count as usize,
+        refs: i.ref_count as usize,
+        events: 0,
+        prim_flags: 0,
+    });
+    let mut stats = TraceStats::default();
+    let (primary_s, hits) = best_of(repeat, || {
+        stats = TraceStats::default();
+        primary
+            .iter()
+            .map(|r| tree.intersect(r, method, &mut stats))
+            .collect::<Vec<_>>()
+    });
+    let (shadow_s, shadowed) = best_of(repeat, || {
+        let mut st = TraceStats::default();
+        shadow
+            .iter()
+            .map(|r| tree.occluded(r, method, &mut st))
+            .collect::<Vec<_>>()
+    });
+    let n = primary.len().max(1) as f64;
+    Traced {
+        row: Row {
+            method: name.to_string(),
+            build_ms,
+            arena_bytes: Some(used.total_bytes),
+            primary_s,
+            shadow_s,
+            primary_rays: primary.len(),
+            shadow_rays: shadow.len(),
+            tspr: Some(stats.traversal_steps as f64 / n),
+            isect_per_ray: Some(stats.prim_tests as f64 / n),
+            mismatches: 0,
+            truncated: i.truncated(),
+        },
+        hits,
+        shadowed,
+    }
+}
+
+#[cfg(feature = "embree")]
+pub fn run_embree(s: &SceneData, primary: &[Ray], shadow: &[Ray], repeat: usize) -> Traced {
+    let t = Instant::now();
+    let e = coray_embree::EmbreeScene::new(&s.scene(), Some(1));
+    let build_ms = t.elapsed().as_secs_f64() * 1e3;
+    let (primary_s, hits) = best_of(repeat, || {
+        primary.iter().map(|r| e.intersect(r)).collect::<Vec<_>>()
+    });
+    let (shadow_s, shadowed) = best_of(repeat, || {
+        shadow.iter().map(|r| e.occluded(r)).collect::<Vec<_>>()
+    });
+    Traced {
+        row: Row {
+            method: "embree".into(),
+            build_ms,
+            arena_bytes: None,
+            primary_s,
+            shadow_s,
+            primary_rays: primary.len(),
+            shadow_rays: shadow.len(),
+            ..Row::default()
+        },
+        hits,
+        shadowed,
+    }
+}
+
+/// Every method coray has (and Embree when built with it).
+pub fn all_methods() -> Vec<&'static str> {
+    let mut m = vec!["kd", "kd-rope"];
+    if cfg!(feature = "embree") {
+        m.push("embree");
+    }
+    m
+}
+
+/// Runs the named methods on the same rays. The reference for mismatches,
+/// alpha and eta is the kd-tree's hierarchical traversal, traced in the same
+/// run whether or not `kd` is listed.
+pub fn bench(
+    s: &SceneData,
+    methods: &[String],
+    params: &KdParams,
+    repeat: usize,
+) -> Result<Vec<Row>, String> {
+    for m in methods {
+        if !all_methods().contains(&m.as_str()) {
+            return Err(format!(
+                "unknown method `{m}` (have: {})",
+                all_methods().join(", ")
+            ));
+        }
+    }
+    let primary = primary_rays(s);
+    let first = run_kd(s, params, Traversal::Hierarchical, "kd", &primary, &[], 1);
+    let shadow = shadow_rays(s, &first.hits);
+    let reference = run_kd(
+        s,
+        params,
+        Traversal::Hierarchical,
+        "kd",
+        &primary,
+        &shadow,
+        repeat,
+    );
+    let mut rows = Vec::new();
+    if !methods.iter().any(|m| m == "kd") {
+        rows.push(reference.row.clone());
+    }
+    for m in methods {
+        let traced = match m.as_str() {
+            "kd" => Traced {
+                row: reference.row.clone(),
+                hits: reference.hits.clone(),
+                shadowed: reference.shadowed.clone(),
+            },
+            "kd-rope" => run_kd(
+                s,
+                params,
+                Traversal::Ropes,
+                "kd-rope",
+                &primary,
+                &shadow,
+                repeat,
+            ),
+            #[cfg(feature = "embree")]
+            "embree" => run_embree(s, &primary, &shadow, repeat),
+            _ => unreachable!("checked above"),
+        };
+        let mut row = traced.row;
+        row.mismatches = traced
+            .hits
+            .iter()
+            .zip(&reference.hits)
+            .filter(|(a, b)| !same_hit(a, b))
+            .count()
+            + traced
+                .shadowed
+                .iter()
+                .zip(&reference.shadowed)
+                .filter(|(a, b)| a != b)
+                .count();
+        rows.push(row);
+    }
+    Ok(rows)
+}
+
+/// The reference row (kd hierarchical) of a set of rows, if present.
+pub fn reference(rows: &[Row]) -> Option<&Row> {
+    rows.iter().find(|r| r.method == "kd")
+}
+
+/// Prints the rows as a table.
+pub fn print_table(s: &SceneData, rows: &[Row]) {
+    let kd = reference(rows);
+    let embree = rows.iter().find(|r| r.method == "embree");
+    println!(
+        "scene {}: {} primitives, {}x{} primary rays, {} shadow rays, 1 thread",
+        s.name,
+        s.prim_count(),
+        s.camera.width,
+        s.camera.height,
+        rows.first().map_or(0, |r| r.shadow_rays)
+    );
+    println!(
+        "{:<10} {:>9} {:>11} {:>7} {:>9} {:>9} {:>7} {:>8} {:>6} {:>6} {:>9} {:>9} {:>5}",
+        "method",
+        "build ms",
+        "arena B",
+        "B/prim",
+        "prim Mr/s",
+        "shad Mr/s",
+        "TSPR",
+        "isect/r",
+        "alpha",
+        "eta",
+        "vs embree",
+        "mismatch",
+        "trunc"
+    );
+    let opt = |v: Option<f64>, p: usize| v.map_or("-".to_string(), |x| format!("{x:.p$}"));
+    for r in rows {
+        let alpha = kd.and_then(|k| Some(r.tspr? / k.tspr?));
+        let eta = kd.map(|k| r.primary_s / k.primary_s);
+        let vs_embree = embree.map(|e| r.primary_mrays() / e.primary_mrays());
+        println!(
+            "{:<10} {:>9.1} {:>11} {:>7} {:>9.3} {:>9.3} {:>7} {:>8} {:>6} {:>6} {:>9} {:>9} {:>5}",
+            r.method,
+            r.build_ms,
+            r.arena_bytes.map_or("-".into(), |b| b.to_string()),
+            r.arena_bytes.map_or("-".into(), |b| format!(
+                "{:.1}",
+                b as f64 / s.prim_count().max(1) as f64
+            )),
+            r.primary_mrays(),
+            r.shadow_mrays(),
+            opt(r.tspr, 2),
+            opt(r.isect_per_ray, 2),
+            opt(alpha, 3),
+            opt(eta, 3),
+            opt(vs_embree, 3),
+            r.mismatches,
+            if r.truncated { "yes" } else { "no" }
+        );
+    }
+    if let Some(e) = embree {
+        println!(
+            "ratios to Embree, shadow rays: {}",
+            rows.iter()
+                .filter(|r| r.method != "embree")
+                .map(|r| format!("{} {:.3}", r.method, r.shadow_mrays() / e.shadow_mrays()))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+}
+
+fn json_num(v: Option<f64>) -> String {
+    match v {
+        Some(x) if x.is_finite() => format!("{x}"),
+        _ => "null".into(),
+    }
+}
+
+/// The rows as one JSON object.
+pub fn to_json(s: &SceneData, rows: &[Row]) -> String {
+    let kd = reference(rows);
+    let items: Vec<String> = rows
+        .iter()
+        .map(|r| {
+            let alpha = kd.and_then(|k| Some(r.tspr? / k.tspr?));
+            let eta = kd.map(|k| r.primary_s / k.primary_s);
+            format!(
+                "{{\"method\": \"{}\", \"build_ms\": {}, \"arena_bytes\": {}, \"primary_mrays\": {}, \"shadow_mrays\": {}, \
+                 \"tspr\": {}, \"isect_per_ray\": {}, \"alpha\": {}, \"eta\": {}, \"mismatches\": {}, \"truncated\": {}}}",
+                r.method,
+                json_num(Some(r.build_ms)),
+                r.arena_bytes.map_or("null".into(), |b| b.to_string()),
+                json_num(Some(r.primary_mrays())),
+                json_num(Some(r.shadow_mrays())),
+                json_num(r.tspr),
+                json_num(r.isect_per_ray),
+                json_num(alpha),
+                json_num(eta),
+                r.mismatches,
+                r.truncated
+            )
+        })
+        .collect();
+    format!(
+        "{{\"scene\": \"{}\", \"objects\": {}, \"res\": [{}, {}], \"rows\": [{}]}}",
+        s.name,
+        s.prim_count(),
+        s.camera.width,
+        s.camera.height,
+        items.join(", ")
+    )
+}
