@@ -4,7 +4,7 @@ use glam::Vec3;
 /// A pinhole camera as NFF's `v` block gives it: eye, look-at point, up
 /// vector, field of view and resolution. Rays go through pixel centres;
 /// row 0 is the top of the image.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Camera {
     /// Eye position.
     pub from: Vec3,

@@ -1,0 +1,10 @@
+//! Scenes for coray: Eric Haines' Neutral File Format (NFF) read and
+//! written, and triangulated into the arrays a [`coray::Scene`] borrows.
+#![warn(missing_docs)]
+
+pub mod mesh;
+pub mod nff;
+pub mod triangulate;
+
+pub use mesh::SceneMesh;
+pub use nff::{Light, Material, NffError, NffScene, Object, View};

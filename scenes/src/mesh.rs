@@ -1,0 +1,200 @@
+//! An NFF scene flattened into the arrays a [`coray::Scene`] borrows, with
+//! what shading needs alongside: a material per primitive, vertex normals of
+//! `pp` polygons, the camera and the lights.
+
+use crate::nff::{Material, NffScene, Object, View};
+use crate::triangulate::ear_clip;
+use coray::{Camera, Cone, Scene, Sphere, Vec3};
+
+/// Objects of a scene by type, as `coray stats` and the SPD table count them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Counts {
+    /// Spheres.
+    pub spheres: usize,
+    /// Polygons (`p` and `pp`).
+    pub polygons: usize,
+    /// Of those, `pp` polygons (with vertex normals).
+    pub polygons_with_normals: usize,
+    /// Triangles after triangulation.
+    pub triangles: usize,
+    /// Cones (radii differ).
+    pub cones: usize,
+    /// Cylinders (equal radii).
+    pub cylinders: usize,
+    /// Lights.
+    pub lights: usize,
+}
+
+impl Counts {
+    /// Objects as the SPD counts them: spheres, polygons, cones, cylinders.
+    pub fn objects(&self) -> usize {
+        self.spheres + self.polygons + self.cones + self.cylinders
+    }
+}
+
+/// A scene ready to trace and shade.
+#[derive(Clone, Debug, Default)]
+pub struct SceneMesh {
+    /// Vertex positions.
+    pub vertices: Vec<[f32; 3]>,
+    /// Shading normal per vertex (the geometric one where the file gave none).
+    pub normals: Vec<[f32; 3]>,
+    /// True where `normals` came from a `pp` polygon.
+    pub has_normal: Vec<bool>,
+    /// Triangles.
+    pub triangles: Vec<[u32; 3]>,
+    /// Spheres.
+    pub spheres: Vec<Sphere>,
+    /// Cones and cylinders.
+    pub cones: Vec<Cone>,
+    /// Material per triangle, sphere and cone (global primitive order).
+    pub prim_material: Vec<u32>,
+    /// Materials; index 0 is the default grey when the file's objects come before any `f`.
+    pub materials: Vec<Material>,
+    /// Camera (a default one looking at the scene when the file has no `v`).
+    pub camera: Camera,
+    /// Hither distance of the view.
+    pub hither: f32,
+    /// Light positions and colours.
+    pub lights: Vec<(Vec3, Vec3)>,
+    /// Background colour.
+    pub background: Vec3,
+    /// Objects by type.
+    pub counts: Counts,
+}
+
+/// The material used before the first `f`.
+pub const DEFAULT_MATERIAL: Material = Material {
+    color: [0.8, 0.8, 0.8],
+    kd: 1.0,
+    ks: 0.0,
+    shine: 0.0,
+    t: 0.0,
+    ior: 1.0,
+};
+
+impl SceneMesh {
+    /// Flattens `nff`: polygons triangulated by ear clipping, spheres and
+    /// cones as they are.
+    pub fn from_nff(nff: &NffScene) -> SceneMesh {
+        let mut m = SceneMesh {
+            materials: vec![DEFAULT_MATERIAL],
+            ..SceneMesh::default()
+        };
+        m.materials.extend(nff.materials.iter().copied());
+        let mat = |o: &Object| o.material().map_or(0, |i| i as u32 + 1);
+        let (mut tri_mat, mut sph_mat, mut cone_mat) = (Vec::new(), Vec::new(), Vec::new());
+        for o in &nff.objects {
+            match o {
+                Object::Sphere { center, radius, .. } => {
+                    m.spheres.push(Sphere {
+                        center: *center,
+                        radius: *radius,
+                    });
+                    sph_mat.push(mat(o));
+                    m.counts.spheres += 1;
+                }
+                Object::Cone {
+                    base,
+                    base_radius,
+                    apex,
+                    apex_radius,
+                    ..
+                } => {
+                    m.cones.push(Cone {
+                        base: *base,
+                        base_radius: *base_radius,
+                        apex: *apex,
+                        apex_radius: *apex_radius,
+                    });
+                    cone_mat.push(mat(o));
+                    if base_radius == apex_radius {
+                        m.counts.cylinders += 1;
+                    } else {
+                        m.counts.cones += 1;
+                    }
+                }
+                Object::Polygon {
+                    vertices, normals, ..
+                } => {
+                    let first = m.vertices.len() as u32;
+                    let n = crate::triangulate::newell_normal(vertices);
+                    let geometric =
+                        Vec3::new(n[0] as f32, n[1] as f32, n[2] as f32).normalize_or_zero();
+                    m.vertices.extend_from_slice(vertices);
+                    match normals {
+                        Some(ns) => {
+                            m.normals.extend_from_slice(ns);
+                            m.has_normal.extend(std::iter::repeat_n(true, ns.len()));
+                            m.counts.polygons_with_normals += 1;
+                        }
+                        None => {
+                            m.normals
+                                .extend(std::iter::repeat_n(geometric.to_array(), vertices.len()));
+                            m.has_normal
+                                .extend(std::iter::repeat_n(false, vertices.len()));
+                        }
+                    }
+                    for t in ear_clip(vertices) {
+                        m.triangles.push(t.map(|i| i + first));
+                        tri_mat.push(mat(o));
+                    }
+                    m.counts.polygons += 1;
+                }
+            }
+        }
+        m.counts.triangles = m.triangles.len();
+        m.counts.lights = nff.lights.len();
+        m.prim_material = tri_mat.into_iter().chain(sph_mat).chain(cone_mat).collect();
+        m.lights = nff
+            .lights
+            .iter()
+            .map(|l| {
+                let c = l.color.unwrap_or([1.0; 3]);
+                (Vec3::from(l.pos), Vec3::from(c))
+            })
+            .collect();
+        m.background = Vec3::from(nff.background.unwrap_or([0.0; 3]));
+        let bounds = m.scene().bounds();
+        let view = nff.view.unwrap_or_else(|| {
+            let c = if bounds.is_empty() {
+                Vec3::ZERO
+            } else {
+                (bounds.min + bounds.max) * 0.5
+            };
+            let r = if bounds.is_empty() {
+                1.0
+            } else {
+                (bounds.max - bounds.min).length().max(1e-6)
+            };
+            View {
+                from: (c + Vec3::new(0.0, 0.3, 1.0).normalize() * (1.5 * r)).into(),
+                at: c.into(),
+                up: [0.0, 1.0, 0.0],
+                angle: 45.0,
+                hither: 0.0,
+                resolution: [512, 512],
+            }
+        });
+        m.camera = Camera {
+            from: view.from.into(),
+            at: view.at.into(),
+            up: view.up.into(),
+            angle_deg: view.angle,
+            width: view.resolution[0],
+            height: view.resolution[1],
+        };
+        m.hither = view.hither;
+        m
+    }
+
+    /// The arrays as a coray scene.
+    pub fn scene(&self) -> Scene<'_> {
+        Scene {
+            vertices: &self.vertices,
+            triangles: &self.triangles,
+            spheres: &self.spheres,
+            cones: &self.cones,
+        }
+    }
+}

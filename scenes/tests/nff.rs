@@ -1,0 +1,163 @@
+//! The NFF reader and writer.
+use coray_scenes::nff::{NffScene, Object};
+use coray_scenes::SceneMesh;
+
+const SAMPLE: &str = "# a sample with every command
+b 0.078 0.361 0.753
+v
+from 2.1 1.3 1.7
+at 0 0 0
+up 0 0 1
+angle 45
+hither 0.01
+resolution 512 256
+l 4 3 2
+l 1 -4 4 0.5 0.5 0.5
+f 1 0.75 0.33 0.8 0 0 0 1
+s 0 0 0 0.5
+c 0 0 0 0.1 0 0 1 0.1
+c
+  1 1 1 0.2
+  1 1 2 0
+f 0.5 0.5 0.5 1 0 100 0.5 1.5
+p 4
+-1 -1 0
+ 1 -1 0
+ 1  1 0
+-1  1 0
+pp 3
+0 0 1 0 0 1
+1 0 1 0 0 1
+0 1 1 0 0 1
+s 3 3 3 -1
+";
+
+#[test]
+fn reads_every_command() {
+    let s = NffScene::parse(SAMPLE).unwrap();
+    let v = s.view.unwrap();
+    assert_eq!(v.from, [2.1, 1.3, 1.7]);
+    assert_eq!(v.up, [0.0, 0.0, 1.0]);
+    assert_eq!((v.angle, v.hither, v.resolution), (45.0, 0.01, [512, 256]));
+    assert_eq!(s.background, Some([0.078, 0.361, 0.753]));
+    assert_eq!(s.lights.len(), 2);
+    assert_eq!(s.lights[0].color, None);
+    assert_eq!(s.lights[1].color, Some([0.5, 0.5, 0.5]));
+    assert_eq!(s.materials.len(), 2);
+    assert_eq!(s.materials[1].ior, 1.5);
+    assert_eq!(s.objects.len(), 6);
+    assert!(matches!(
+        s.objects[1],
+        Object::Cone {
+            base_radius: 0.1,
+            apex_radius: 0.1,
+            material: Some(0),
+            ..
+        }
+    ));
+    assert!(matches!(
+        s.objects[2],
+        Object::Cone {
+            apex: [1.0, 1.0, 2.0],
+            apex_radius: 0.0,
+            ..
+        }
+    ));
+    match &s.objects[4] {
+        Object::Polygon {
+            vertices,
+            normals: Some(n),
+            material: Some(1),
+        } => {
+            assert_eq!(vertices.len(), 3);
+            assert_eq!(n[2], [0.0, 0.0, 1.0]);
+        }
+        o => panic!("{o:?}"),
+    }
+    assert!(matches!(
+        s.objects[5],
+        Object::Sphere {
+            radius: 1.0,
+            inside_visible: true,
+            ..
+        }
+    ));
+
+    let m = SceneMesh::from_nff(&s);
+    let c = m.counts;
+    assert_eq!(
+        (
+            c.spheres,
+            c.polygons,
+            c.polygons_with_normals,
+            c.triangles,
+            c.cones,
+            c.cylinders,
+            c.lights
+        ),
+        (2, 2, 1, 3, 1, 1, 2)
+    );
+    assert_eq!(c.objects(), 6);
+    assert_eq!(m.prim_material.len(), 3 + 2 + 2);
+    assert_eq!(m.prim_material[0], 2); // the quad's triangles use the second `f` (index 1, +1 for the default)
+    assert_eq!(m.camera.width, 512);
+}
+
+#[test]
+fn writer_round_trips() {
+    let s = NffScene::parse(SAMPLE).unwrap();
+    let text = s.to_nff();
+    let back = NffScene::parse(&text).unwrap();
+    assert_eq!(back, s);
+    assert_eq!(back.to_nff(), text);
+}
+
+#[test]
+fn errors_name_line_and_column() {
+    let cases: &[(&str, usize, usize, &str)] = &[
+        ("s 0 0 0 0.5\nq 1 2\n", 2, 1, "unknown command `q`"),
+        ("s 0 0 zero 1\n", 1, 7, "sphere centre"),
+        (
+            "b 1 1 1\nv\nfrom 0 0 0\nat 0 0\nup 0 1 0\n",
+            5,
+            1,
+            "`at` coordinate",
+        ),
+        ("p 2\n0 0 0\n1 1 1\n", 1, 1, "at least 3 vertices"),
+        ("p 3\n0 0 0\n1 1 1\n", 3, 6, "end of file"),
+        ("  f 1 1 1 1 1 1 1 nan\n", 1, 19, "index of refraction"),
+        ("s 0 0 0 1e39\n", 1, 9, "finite"),
+        ("p 99999999999\n", 1, 3, "whole number"),
+        (
+            "v\nfrom 0 0 0\nat 0 0 0\nup 0 1 0\nangle 45\nhither 1\nresolution -3 4\n",
+            7,
+            12,
+            "x resolution",
+        ),
+    ];
+    for (src, line, col, text) in cases {
+        let e = NffScene::parse(src).unwrap_err();
+        assert_eq!((e.line, e.col), (*line, *col), "{src:?}: {e}");
+        assert!(e.msg.contains(text), "{src:?}: {e}");
+    }
+}
+
+#[test]
+fn garbage_never_panics() {
+    let mut x = 0x1234_5678_9abc_def0u64;
+    let alphabet = b"vbflcsp# \n\t0123456789.-+eE fromatupanglehitherresolution";
+    for len in 0..400 {
+        let bytes: Vec<u8> = (0..len)
+            .map(|_| {
+                x ^= x << 13;
+                x ^= x >> 7;
+                x ^= x << 17;
+                alphabet[(x % alphabet.len() as u64) as usize]
+            })
+            .collect();
+        let text = String::from_utf8_lossy(&bytes);
+        if let Err(e) = NffScene::parse(&text) {
+            assert!(e.line >= 1 && e.col >= 1);
+        }
+    }
+}
