@@ -4,6 +4,7 @@
 
 pub mod mesh;
 pub mod nff;
+pub mod spd;
 pub mod triangulate;
 
 pub use mesh::SceneMesh;
