@@ -70,6 +70,12 @@ struct Task {
     start: usize,
     counts: [usize; 3],
     prims: usize,
+    /// References this subtree may use. The root has the whole `refs`
+    /// slice; a split gives each child its own references plus a share of
+    /// the spare in proportion to them, so budgets never sum past the
+    /// slice and room runs out evenly across the tree, not in whichever
+    /// subtree depth-first order reaches first.
+    ref_budget: usize,
 }
 
 impl Task {
@@ -135,9 +141,6 @@ struct Builder<'s, 'a> {
     node_top: usize,
     leaf_top: usize,
     ref_top: usize,
-    /// References held by the leaves made so far plus every pending node:
-    /// what the finished tree needs at least.
-    frontier_refs: usize,
     pending: usize,
     depth: u32,
     truncated: bool,
@@ -197,7 +200,6 @@ pub fn build_sah<'a>(
         node_top: 1,
         leaf_top: 0,
         ref_top: 0,
-        frontier_refs: 0,
         pending: 0,
         depth: 0,
         truncated: false,
@@ -257,7 +259,6 @@ impl<'s, 'a> Builder<'s, 'a> {
             self.events[s..at].sort_unstable_by(KdEvent::order);
             *count = at - s;
         }
-        self.frontier_refs = valid;
         Task {
             node: 0,
             depth: 0,
@@ -265,11 +266,13 @@ impl<'s, 'a> Builder<'s, 'a> {
             start: 0,
             counts,
             prims: valid,
+            ref_budget: self.refs.len(),
         }
     }
 
     /// Depth-first: split the current node while it pays, keep right
-    /// children on a stack bounded by the depth limit.
+    /// children on a stack bounded by the depth limit. What a leaf leaves of
+    /// its reference budget passes to the next node built.
     fn run(&mut self, root: Task) {
         let mut stack = [root; KD_MAX_DEPTH as usize + 1];
         let mut task = root;
@@ -285,8 +288,10 @@ impl<'s, 'a> Builder<'s, 'a> {
                     if self.pending == 0 {
                         return;
                     }
+                    let spare = task.ref_budget - task.prims;
                     self.pending -= 1;
                     task = stack[self.pending];
+                    task.ref_budget += spare;
                 }
             }
         }
@@ -484,8 +489,7 @@ impl<'s, 'a> Builder<'s, 'a> {
         if !self.params.sah_termination && nl == n && nr == n {
             return None;
         }
-        let frontier = (self.frontier_refs + nl + nr).saturating_sub(n);
-        if frontier > self.refs.len() {
+        if nl + nr > task.ref_budget {
             self.truncated = true;
             return None;
         }
@@ -517,7 +521,8 @@ impl<'s, 'a> Builder<'s, 'a> {
         let c = self.node_top as u32;
         self.node_top += 2;
         self.nodes[task.node as usize] = KdNode::interior(k, p, c);
-        self.frontier_refs = frontier;
+        let spare = task.ref_budget - nl - nr;
+        let left_budget = nl + (spare as u128 * nl as u128 / (nl + nr).max(1) as u128) as usize;
         let left = Task {
             node: c,
             depth: task.depth + 1,
@@ -525,6 +530,7 @@ impl<'s, 'a> Builder<'s, 'a> {
             start: base + er,
             counts: lcounts,
             prims: nl,
+            ref_budget: left_budget,
         };
         let right = Task {
             node: c + 1,
@@ -533,6 +539,7 @@ impl<'s, 'a> Builder<'s, 'a> {
             start: base,
             counts: rcounts,
             prims: nr,
+            ref_budget: task.ref_budget - left_budget,
         };
         Some((left, right))
     }
