@@ -3,12 +3,9 @@
 //! hierarchical traversal (alpha for traversal steps, eta for time) and to
 //! Embree when it is in the run.
 
+use crate::kdbuild::OwnedKd;
 use crate::scene::SceneData;
-use coray::arena::KdArenaLayout;
-use coray::kd::{
-    self, KdEvent, KdLeaf, KdNode, KdParams, KdRequirements, KdRopes, KdScratch, KdStorage,
-    Traversal,
-};
+use coray::kd::{KdParams, Traversal};
 use coray::{Hit, Ray, TraceStats};
 use std::time::Instant;
 
@@ -49,7 +46,7 @@ pub fn shadow_rays(s: &SceneData, reference: &[Hit]) -> Vec<Ray> {
             continue;
         }
         let p = r.origin + r.dir * h.t;
-        for l in &s.lights {
+        for (l, _) in &s.mesh.lights {
             let d = *l - p;
             let len = d.length();
             if len > 0.0 {
@@ -61,7 +58,7 @@ pub fn shadow_rays(s: &SceneData, reference: &[Hit]) -> Vec<Ray> {
 }
 
 pub fn primary_rays(s: &SceneData) -> Vec<Ray> {
-    let c = &s.camera;
+    let c = &s.mesh.camera;
     let (f, r, u) = c.basis();
     let mut rays = Vec::with_capacity((c.width * c.height) as usize);
     for y in 0..c.height {
@@ -116,40 +113,8 @@ pub fn run_kd(
     shadow: &[Ray],
     repeat: usize,
 ) -> Traced {
-    let scene = s.scene();
-    let req: KdRequirements = kd::requirements(scene.prim_count(), params);
-    let mut nodes = vec![KdNode::default(); req.nodes];
-    let mut leaves = vec![KdLeaf::default(); req.leaves];
-    let mut ropes = vec![KdRopes::default(); req.ropes];
-    let mut refs = vec![0u32; req.refs];
-    let mut events = vec![KdEvent::default(); req.events];
-    let mut flags = vec![0u8; req.prim_flags];
-    let t = Instant::now();
-    let tree = kd::build_sah(
-        &scene,
-        params,
-        KdStorage {
-            nodes: &mut nodes,
-            leaves: &mut leaves,
-            ropes: &mut ropes,
-            refs: &mut refs,
-        },
-        KdScratch {
-            events: &mut events,
-            prim_flags: &mut flags,
-        },
-    )
-    .expect("kd build");
-    let build_ms = t.elapsed().as_secs_f64() * 1e3;
-    let i = &tree.info;
-    let used = KdArenaLayout::of(&KdRequirements {
-        nodes: i.node_count as usize,
-        leaves: i.leaf_count as usize,
-        ropes: i.leaf_count as usize,
-        refs: i.ref_count as usize,
-        events: 0,
-        prim_flags: 0,
-    });
+    let owned = OwnedKd::build(&s.mesh.scene(), params).expect("kd build");
+    let tree = owned.tree(s.mesh.scene());
     let mut stats = TraceStats::default();
     let (primary_s, hits) = best_of(repeat, || {
         stats = TraceStats::default();
@@ -169,8 +134,8 @@ pub fn run_kd(
     Traced {
         row: Row {
             method: name.to_string(),
-            build_ms,
-            arena_bytes: Some(used.total_bytes),
+            build_ms: owned.build_ms,
+            arena_bytes: Some(owned.arena_bytes()),
             primary_s,
             shadow_s,
             primary_rays: primary.len(),
@@ -178,7 +143,7 @@ pub fn run_kd(
             tspr: Some(stats.traversal_steps as f64 / n),
             isect_per_ray: Some(stats.prim_tests as f64 / n),
             mismatches: 0,
-            truncated: i.truncated(),
+            truncated: owned.info.truncated(),
         },
         hits,
         shadowed,
@@ -188,7 +153,7 @@ pub fn run_kd(
 #[cfg(feature = "embree")]
 pub fn run_embree(s: &SceneData, primary: &[Ray], shadow: &[Ray], repeat: usize) -> Traced {
     let t = Instant::now();
-    let e = coray_embree::EmbreeScene::new(&s.scene(), Some(1));
+    let e = coray_embree::EmbreeScene::new(&s.mesh.scene(), Some(1));
     let build_ms = t.elapsed().as_secs_f64() * 1e3;
     let (primary_s, hits) = best_of(repeat, || {
         primary.iter().map(|r| e.intersect(r)).collect::<Vec<_>>()
@@ -305,8 +270,8 @@ pub fn print_table(s: &SceneData, rows: &[Row]) {
         "scene {}: {} primitives, {}x{} primary rays, {} shadow rays, 1 thread",
         s.name,
         s.prim_count(),
-        s.camera.width,
-        s.camera.height,
+        s.mesh.camera.width,
+        s.mesh.camera.height,
         rows.first().map_or(0, |r| r.shadow_rays)
     );
     println!(
@@ -398,8 +363,8 @@ pub fn to_json(s: &SceneData, rows: &[Row]) -> String {
         "{{\"scene\": \"{}\", \"objects\": {}, \"res\": [{}, {}], \"rows\": [{}]}}",
         s.name,
         s.prim_count(),
-        s.camera.width,
-        s.camera.height,
+        s.mesh.camera.width,
+        s.mesh.camera.height,
         items.join(", ")
     )
 }

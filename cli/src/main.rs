@@ -1,34 +1,62 @@
-//! `coray`: the command-line face of the library.
+//! `coray`: render, benchmark and inspect scenes.
 //!
-//! With no arguments it runs the main job: `coray bench` on the built-in
-//! default scene.
+//! With no arguments it runs the main job: `coray render` of the built-in
+//! default scene (spd:balls) to coray.png.
 
 mod bench;
+mod kdbuild;
+mod render;
 mod scene;
+mod stats;
 
 use clap::{Parser, Subcommand};
-use coray::kd::KdParams;
+use coray::kd::Traversal;
+use coray_scenes::spd::Options;
+use std::path::PathBuf;
 
 #[derive(Parser)]
 #[command(
     name = "coray",
     version,
-    about = "Allocation-free ray shooting: benchmarks against Embree"
+    about = "Allocation-free ray shooting: render, benchmark and inspect scenes"
 )]
 struct Cli {
+    /// Cut SPD floors into K x K polygons (thesis 6.3.6).
+    #[arg(long, global = true, default_value_t = 1, value_name = "K")]
+    floor_split: u32,
     #[command(subcommand)]
     command: Option<Command>,
 }
 
 #[derive(Subcommand)]
 enum Command {
-    /// Build each method, cast one primary ray per pixel and one shadow ray
-    /// per hit per light, single-threaded; print a table or JSON.
+    /// Whitted ray tracing to a PNG: primary, shadow, reflection and refraction rays.
+    Render {
+        /// Scene: an NFF file, `spd:NAME[:SIZE]` or `random[:N]`.
+        #[arg(default_value = "spd:balls")]
+        scene: String,
+        /// Output PNG.
+        #[arg(short, long, default_value = "coray.png")]
+        output: PathBuf,
+        /// Resolution WxH (default: the scene's).
+        #[arg(long)]
+        res: Option<String>,
+        /// Structure and traversal: kd, kd-rope, kd-paper, kd-paper-rope.
+        #[arg(long, default_value = "kd")]
+        accel: String,
+        /// Reflection and refraction depth.
+        #[arg(long, default_value_t = 5)]
+        depth: u32,
+        /// Threads (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+    },
+    /// Every method on the same primary and shadow rays, one thread; a table or JSON.
     Bench {
-        /// Scene: `random` (100,000 triangles and 10,000 spheres) or `random:N`.
+        /// Scene: an NFF file, `spd:NAME[:SIZE]` or `random[:N]` (100,000 triangles, 10,000 spheres).
         #[arg(default_value = "random")]
         scene: String,
-        /// Image resolution N (N x N primary rays).
+        /// Resolution N (N x N primary rays).
         #[arg(long, default_value_t = 1024)]
         res: u32,
         /// Comma-separated methods (default: every method of this build).
@@ -44,26 +72,99 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Objects by type and, per structure, its size and shape.
+    Stats {
+        /// Scene: an NFF file, `spd:NAME[:SIZE]` or `random[:N]`.
+        scene: String,
+        /// Print one JSON object.
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 fn main() {
     let cli = Cli::parse();
-    let command = cli.command.unwrap_or(Command::Bench {
-        scene: "random".into(),
-        res: 1024,
-        methods: None,
-        preset: "auto".into(),
-        repeat: 3,
-        json: false,
+    let opts = Options {
+        floor_split: cli.floor_split,
+    };
+    let command = cli.command.unwrap_or(Command::Render {
+        scene: "spd:balls".into(),
+        output: "coray.png".into(),
+        res: None,
+        accel: "kd".into(),
+        depth: 5,
+        threads: None,
     });
-    if let Err(e) = run(command) {
+    if let Err(e) = run(command, &opts) {
         eprintln!("coray: {e}");
         std::process::exit(2);
     }
 }
 
-fn run(command: Command) -> Result<(), String> {
+fn parse_res(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s.split_once('x').unwrap_or((s, s));
+    let p = |v: &str| {
+        v.parse::<u32>()
+            .ok()
+            .filter(|&n| (1..=1 << 15).contains(&n))
+            .ok_or(format!("bad resolution `{s}` (WxH)"))
+    };
+    Ok((p(w)?, p(h)?))
+}
+
+fn run(command: Command, opts: &Options) -> Result<(), String> {
     match command {
+        Command::Render {
+            scene,
+            output,
+            res,
+            accel,
+            depth,
+            threads,
+        } => {
+            let mut s = scene::load(&scene, opts)?;
+            if let Some(r) = res {
+                let (w, h) = parse_res(&r)?;
+                s.mesh.camera.width = w;
+                s.mesh.camera.height = h;
+            }
+            let (preset, method) = match accel.as_str() {
+                "kd" => ("auto", Traversal::Hierarchical),
+                "kd-rope" => ("auto", Traversal::Ropes),
+                "kd-paper" => ("paper", Traversal::Hierarchical),
+                "kd-paper-rope" => ("paper", Traversal::Ropes),
+                a => {
+                    return Err(format!(
+                        "unknown --accel `{a}` (kd, kd-rope, kd-paper, kd-paper-rope)"
+                    ))
+                }
+            };
+            let owned = kdbuild::OwnedKd::build(&s.mesh.scene(), &kdbuild::preset(preset)?)?;
+            let tree = owned.tree(s.mesh.scene());
+            let tracer = render::Tracer {
+                mesh: &s.mesh,
+                tree: &tree,
+                method,
+                max_depth: depth,
+            };
+            let threads = threads
+                .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+            let t = std::time::Instant::now();
+            let (rgb, st) = render::render(&tracer, threads, true);
+            let secs = t.elapsed().as_secs_f64();
+            let (w, h) = (s.mesh.camera.width, s.mesh.camera.height);
+            render::write_png(&output, w, h, &rgb)?;
+            println!(
+                "{}: {} objects, {w}x{h}, {} rays ({:.2} Mrays/s on {threads} threads, build {:.0} ms) -> {}",
+                s.name,
+                s.mesh.counts.objects(),
+                st.rays,
+                st.rays as f64 / secs / 1e6,
+                owned.build_ms,
+                output.display()
+            );
+            Ok(())
+        }
         Command::Bench {
             scene,
             res,
@@ -72,17 +173,13 @@ fn run(command: Command) -> Result<(), String> {
             repeat,
             json,
         } => {
-            let mut s = scene::load(&scene)?;
+            let mut s = scene::load(&scene, opts)?;
             if res == 0 {
                 return Err("--res must be at least 1".into());
             }
-            s.camera.width = res;
-            s.camera.height = res;
-            let params = match preset.as_str() {
-                "auto" => KdParams::auto(),
-                "paper" => KdParams::paper(),
-                p => return Err(format!("unknown preset `{p}` (auto, paper)")),
-            };
+            s.mesh.camera.width = res;
+            s.mesh.camera.height = res;
+            let params = kdbuild::preset(&preset)?;
             let methods = methods
                 .unwrap_or_else(|| bench::all_methods().iter().map(|m| m.to_string()).collect());
             let rows = bench::bench(&s, &methods, &params, repeat)?;
@@ -91,6 +188,12 @@ fn run(command: Command) -> Result<(), String> {
             } else {
                 bench::print_table(&s, &rows);
             }
+            Ok(())
+        }
+        Command::Stats { scene, json } => {
+            let s = scene::load(&scene, opts)?;
+            let report = stats::stats(&s)?;
+            println!("{}", if json { report.json } else { report.text });
             Ok(())
         }
     }

@@ -16,6 +16,8 @@ fn counts_at_design_sizes() {
         ("gears", 9345, [0, 9345, 0, 0]),
         ("lattice", 8281, [2197, 0, 0, 6084]),
         ("mount", 8196, [4, 8192, 0, 0]),
+        ("rings", 8401, [4200, 1, 0, 4200]),
+        ("teapot", 9264, [0, 9264, 0, 0]),
         ("tetra", 4096, [0, 4096, 0, 0]),
         ("tree", 8191, [4095, 1, 4095, 0]),
     ];
@@ -54,6 +56,23 @@ fn gears_polygons_are_quads_and_concave_144_gons() {
         SceneMesh::from_nff(&s).counts.triangles,
         9217 * 2 + 128 * 142
     );
+}
+
+#[test]
+fn teapot_has_9120_pp_and_144_p_polygons() {
+    let m = mesh("teapot", None, 1);
+    assert_eq!(
+        (m.counts.polygons, m.counts.polygons_with_normals),
+        (9264, 9120)
+    );
+    for s in [1u32, 4, 7] {
+        let k = mesh("teapot", Some(s), 1).counts;
+        let s = s as usize;
+        assert_eq!(
+            (k.polygons_with_normals, k.polygons),
+            (64 * s * s - 8 * s, 64 * s * s - 8 * s + s * s)
+        );
+    }
 }
 
 #[test]

@@ -10,6 +10,8 @@
 //! | gears | s^3 gears of 2 concave 144-gons and 144 quads, 1 floor quad |
 //! | lattice | (s+1)^3 spheres, 3 s (s+1)^2 cylinders |
 //! | mount | 2 * 4^s triangles, 4 spheres |
+//! | teapot | 64 s^2 - 8 s `pp` triangles, s^2 floor squares |
+//! | rings | 600 s spheres, 600 s cylinders, 1 floor polygon |
 //! | tetra | 4^s triangles |
 //! | tree | 2^(s+1) - 1 cones and as many spheres, 1 floor polygon |
 
@@ -17,6 +19,9 @@ mod balls;
 mod gears;
 mod lattice;
 mod mount;
+mod rings;
+mod teapot;
+mod teapot_data;
 mod tetra;
 mod tree;
 
@@ -28,6 +33,8 @@ pub const SCENES: &[(&str, u32)] = &[
     ("gears", 4),
     ("lattice", 12),
     ("mount", 6),
+    ("rings", 7),
+    ("teapot", 12),
     ("tetra", 6),
     ("tree", 11),
 ];
@@ -60,6 +67,8 @@ pub fn generate(name: &str, size: Option<u32>, opts: &Options) -> Result<NffScen
         "gears" => 12,
         "lattice" => 60,
         "mount" | "tetra" => 9,
+        "rings" => 40,
+        "teapot" => 100,
         "tree" => 18,
         _ => 0,
     };
@@ -75,6 +84,8 @@ pub fn generate(name: &str, size: Option<u32>, opts: &Options) -> Result<NffScen
         "gears" => gears::generate(&mut b, size, opts),
         "lattice" => lattice::generate(&mut b, size),
         "mount" => mount::generate(&mut b, size),
+        "rings" => rings::generate(&mut b, size, opts),
+        "teapot" => teapot::generate(&mut b, size),
         "tetra" => tetra::generate(&mut b, size),
         "tree" => tree::generate(&mut b, size, opts),
         _ => unreachable!(),
@@ -146,6 +157,14 @@ impl Builder {
         self.scene.objects.push(Object::Polygon {
             vertices,
             normals: None,
+            material,
+        });
+    }
+    pub fn polygon_with_normals(&mut self, vertices: Vec<V3>, normals: Vec<V3>) {
+        let material = self.current();
+        self.scene.objects.push(Object::Polygon {
+            vertices,
+            normals: Some(normals),
             material,
         });
     }
