@@ -4,6 +4,8 @@
 //! default scene (spd:balls) to coray.png.
 
 mod bench;
+#[cfg(feature = "embree")]
+mod compare;
 mod kdbuild;
 mod render;
 mod scene;
@@ -71,6 +73,22 @@ enum Command {
         /// Print one JSON object instead of a table.
         #[arg(long)]
         json: bool,
+    },
+    /// Primary and shadow rays through coray and Embree, ray by ray; a diff
+    /// image; exits with status 1 when any ray disagrees beyond a documented tie.
+    #[cfg(feature = "embree")]
+    Compare {
+        /// Scene: an NFF file, `spd:NAME[:SIZE]` or `random[:N]`.
+        scene: String,
+        /// Resolution N (N x N primary rays).
+        #[arg(long, default_value_t = 1024)]
+        res: u32,
+        /// kd-tree preset.
+        #[arg(long, default_value = "auto")]
+        preset: String,
+        /// Diff image.
+        #[arg(long, default_value = "coray-diff.png")]
+        diff: PathBuf,
     },
     /// Objects by type and, per structure, its size and shape.
     Stats {
@@ -187,6 +205,29 @@ fn run(command: Command, opts: &Options) -> Result<(), String> {
                 println!("{}", bench::to_json(&s, &rows));
             } else {
                 bench::print_table(&s, &rows);
+            }
+            Ok(())
+        }
+        #[cfg(feature = "embree")]
+        Command::Compare {
+            scene,
+            res,
+            preset,
+            diff,
+        } => {
+            let mut s = scene::load(&scene, opts)?;
+            if res == 0 {
+                return Err("--res must be at least 1".into());
+            }
+            s.mesh.camera.width = res;
+            s.mesh.camera.height = res;
+            let out = compare::compare(&s, &kdbuild::preset(&preset)?, &diff)?;
+            if out.mismatches > 0 {
+                eprintln!(
+                    "coray: {} of {} rays disagree with Embree",
+                    out.mismatches, out.rays
+                );
+                std::process::exit(1);
             }
             Ok(())
         }

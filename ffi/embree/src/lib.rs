@@ -175,3 +175,58 @@ impl Drop for EmbreeScene {
         }
     }
 }
+
+/// How a coray hit and an Embree hit of the same ray relate.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Agreement {
+    /// Both miss, or both hit the same primitive within the tolerance.
+    Same,
+    /// Different primitives at the same distance (shared edges, coincident surfaces).
+    TieSameDistance,
+    /// The nearer answer grazes: near a triangle edge, a cone's rim, or tangent
+    /// to the surface, where a rounding error turns a hit into a miss.
+    TieGrazing,
+    /// Anything else.
+    Mismatch,
+}
+
+/// The cross-check's tolerance: |dt| <= 1e-4 max(1, |t|).
+pub fn tolerance(t: f32) -> f32 {
+    1e-4 * t.abs().max(1.0)
+}
+
+/// True when rounding can turn `h` into a miss on `r`.
+pub fn grazing(r: &Ray, h: &Hit) -> bool {
+    let edge = match h.geom_id {
+        coray::geom::GEOM_TRIANGLES => h.u.min(h.v).min(1.0 - h.u - h.v) < 1e-4,
+        coray::geom::GEOM_CONES => h.u < 1e-3 || h.u > 1.0 - 1e-3,
+        _ => false,
+    };
+    let cos = r.dir.normalize().dot(h.ng.normalize()).abs();
+    edge || cos < 2e-2
+}
+
+/// Classifies a ray's two answers (the documented tie rules of the cross-checks).
+pub fn classify(r: &Ray, a: &Hit, b: &Hit) -> Agreement {
+    match (a.is_hit(), b.is_hit()) {
+        (false, false) => return Agreement::Same,
+        (true, true) if (a.t - b.t).abs() <= tolerance(a.t) => {
+            return if (a.geom_id, a.prim_id) == (b.geom_id, b.prim_id) {
+                Agreement::Same
+            } else {
+                Agreement::TieSameDistance
+            };
+        }
+        _ => {}
+    }
+    let nearer = if !b.is_hit() || (a.is_hit() && a.t < b.t) {
+        a
+    } else {
+        b
+    };
+    if grazing(r, nearer) {
+        Agreement::TieGrazing
+    } else {
+        Agreement::Mismatch
+    }
+}

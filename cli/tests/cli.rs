@@ -1,0 +1,170 @@
+//! The `coray` command end to end.
+use std::path::PathBuf;
+use std::process::Command;
+
+fn coray(args: &[&str], dir: &std::path::Path) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_coray"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("run coray");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into(),
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("coray-cli-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// `coray stats --json` against DESIGN.md's table, all eight SPD scenes.
+#[test]
+fn stats_counts_match_the_design_table() {
+    let d = tmp("stats");
+    let table = [
+        ("balls", 7382, 7381, 1, 0, 0),
+        ("gears", 9345, 0, 9345, 0, 0),
+        ("lattice", 8281, 2197, 0, 0, 6084),
+        ("mount", 8196, 4, 8192, 0, 0),
+        ("rings", 8401, 4200, 1, 0, 4200),
+        ("teapot", 9264, 0, 9264, 0, 0),
+        ("tetra", 4096, 0, 4096, 0, 0),
+        ("tree", 8191, 4095, 1, 4095, 0),
+    ];
+    for (name, objects, spheres, polygons, cones, cylinders) in table {
+        let (code, out, err) = coray(&["stats", &format!("spd:{name}"), "--json"], &d);
+        assert_eq!(code, 0, "{err}");
+        for (key, want) in [
+            ("objects", objects),
+            ("spheres", spheres),
+            ("polygons", polygons),
+            ("cones", cones),
+            ("cylinders", cylinders),
+        ] {
+            assert!(
+                out.contains(&format!("\"{key}\": {want},")),
+                "{name}: {key} should be {want}: {out}"
+            );
+        }
+        assert!(
+            out.contains("\"structure\": \"kd-auto\"")
+                && out.contains("\"structure\": \"kd-paper\"")
+        );
+    }
+}
+
+#[test]
+fn main_job_renders_the_default_scene() {
+    let d = tmp("main");
+    let (code, out, err) = coray(&[], &d);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("spd:balls: 7382 objects, 512x512"), "{out}");
+    let png = std::fs::read(d.join("coray.png")).unwrap();
+    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+    // Width and height in the IHDR chunk.
+    assert_eq!(u32::from_be_bytes(png[16..20].try_into().unwrap()), 512);
+    assert_eq!(u32::from_be_bytes(png[20..24].try_into().unwrap()), 512);
+}
+
+#[test]
+fn render_every_accel_from_an_nff_file() {
+    let d = tmp("render");
+    std::fs::write(
+        d.join("scene.nff"),
+        "v\nfrom 0 -5 2\nat 0 0 0\nup 0 0 1\nangle 40\nhither 0.01\nresolution 48 32\nb 0.1 0.1 0.1\nl 3 -3 6\n\
+         f 1 1 1 1 0 0 0 1\np 4\n-3 -3 0\n3 -3 0\n3 3 0\n-3 3 0\nf 0.2 0.4 1 0.5 0.5 20 0.3 1.5\ns 0 0 1 1\nc 2 0 0 0.3 2 0 2 0.1\n",
+    )
+    .unwrap();
+    for accel in ["kd", "kd-rope", "kd-paper", "kd-paper-rope"] {
+        let (code, out, err) = coray(
+            &[
+                "render",
+                "scene.nff",
+                "--accel",
+                accel,
+                "-o",
+                &format!("{accel}.png"),
+            ],
+            &d,
+        );
+        assert_eq!(code, 0, "{err}");
+        assert!(out.contains("3 objects, 48x32"), "{out}");
+    }
+    // Every traversal renders the same picture.
+    let first = std::fs::read(d.join("kd.png")).unwrap();
+    for accel in ["kd-rope", "kd-paper", "kd-paper-rope"] {
+        assert_eq!(
+            std::fs::read(d.join(format!("{accel}.png"))).unwrap(),
+            first,
+            "{accel}"
+        );
+    }
+}
+
+#[test]
+fn bad_input_is_reported_with_its_position() {
+    let d = tmp("bad");
+    std::fs::write(d.join("bad.nff"), "s 0 0 0 1\ns 1 2 x 4\n").unwrap();
+    let (code, _, err) = coray(&["stats", "bad.nff"], &d);
+    assert_eq!(code, 2);
+    assert!(err.contains("bad.nff:2:7:"), "{err}");
+    let (code, _, err) = coray(&["render", "spd:nothing"], &d);
+    assert_eq!(code, 2);
+    assert!(err.contains("no SPD scene"), "{err}");
+    let (code, _, err) = coray(&["bench", "spd:tree:2", "--methods", "kd,warp"], &d);
+    assert_eq!(code, 2);
+    assert!(err.contains("unknown method `warp`"), "{err}");
+}
+
+#[test]
+fn bench_json_has_every_row_and_exact_ropes() {
+    let d = tmp("bench");
+    let (code, out, err) = coray(
+        &[
+            "bench",
+            "spd:tree:5",
+            "--res",
+            "48",
+            "--repeat",
+            "1",
+            "--json",
+        ],
+        &d,
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(out.starts_with("{\"scene\": \"spd:tree:5\", \"objects\": 127, \"primitives\": 128, \"res\": [48, 48], \"rows\": ["), "{out}");
+    for m in ["kd", "kd-rope"] {
+        assert!(out.contains(&format!("{{\"method\": \"{m}\"")), "{out}");
+    }
+    // The rope traversal gives exactly the hierarchical hits.
+    let rope = &out[out.find("\"method\": \"kd-rope\"").unwrap()..];
+    assert!(
+        rope.contains("\"alpha\": ") && rope.contains("\"mismatches\": 0"),
+        "{rope}"
+    );
+}
+
+#[cfg(feature = "embree")]
+#[test]
+fn compare_agrees_with_embree_on_small_spd_scenes() {
+    let d = tmp("compare");
+    for scene in [
+        "spd:balls:2",
+        "spd:gears:1",
+        "spd:lattice:3",
+        "spd:mount:3",
+        "spd:rings:1",
+        "spd:teapot:4",
+        "spd:tetra:4",
+        "spd:tree:6",
+    ] {
+        let (code, out, err) = coray(&["compare", scene, "--res", "96"], &d);
+        assert_eq!(code, 0, "{scene}: {out}{err}");
+        assert!(out.contains("mismatches: 0 of"), "{scene}: {out}");
+    }
+    assert!(d.join("coray-diff.png").exists());
+}
