@@ -86,7 +86,9 @@ typedef struct CorayKdParams {
 typedef struct CorayKdRequirements {
   // Smallest tree arena a build accepts (the tree is then one leaf).
   size_t tree_min_bytes;
-  // Tree arena in which ordinary scenes build without being cut short.
+  // Tree arena with room for `refs_per_prim` references per primitive
+  // (4 by default): most scenes build without being cut short; one that
+  // needs more stops splitting evenly and says so (`truncated`).
   size_t tree_bytes;
   // Smallest scratch arena a build accepts.
   size_t scratch_min_bytes;

@@ -84,7 +84,9 @@ pub struct CorayKdParams {
 pub struct CorayKdRequirements {
     /// Smallest tree arena a build accepts (the tree is then one leaf).
     pub tree_min_bytes: usize,
-    /// Tree arena in which ordinary scenes build without being cut short.
+    /// Tree arena with room for `refs_per_prim` references per primitive
+    /// (4 by default): most scenes build without being cut short; one that
+    /// needs more stops splitting evenly and says so (`truncated`).
     pub tree_bytes: usize,
     /// Smallest scratch arena a build accepts.
     pub scratch_min_bytes: usize,

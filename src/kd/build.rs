@@ -144,6 +144,12 @@ struct Builder<'s, 'a> {
     pending: usize,
     depth: u32,
     truncated: bool,
+    /// References of the leaves made so far plus every pending node: what
+    /// the tree needs at least if nothing more is split.
+    frontier_refs: usize,
+    /// How the reference room is shared: greedily (any split that fits the
+    /// whole slice) or fairly (each subtree within its [`Task::ref_budget`]).
+    fair: bool,
 }
 
 /// Builds an SAH kd-tree over `scene` into `storage`, using `scratch`.
@@ -203,9 +209,19 @@ pub fn build_sah<'a>(
         pending: 0,
         depth: 0,
         truncated: false,
+        frontier_refs: 0,
+        fair: false,
     };
-    let root = b.root_task();
+    // Greedy first: the best tree whenever the room suffices. When it ran
+    // out, the greedy tree has spent the room on whatever subtrees depth
+    // first order reached first; build again sharing it fairly.
+    let mut root = b.root_task();
     b.run(root);
+    if b.truncated {
+        b.restart_fair();
+        root = b.root_task();
+        b.run(root);
+    }
     let bounds = root.voxel;
     ropes::build_ropes(&b.nodes[..b.node_top], &mut b.ropes[..b.leaf_top], &bounds);
     let info = KdInfo {
@@ -236,6 +252,16 @@ pub fn build_sah<'a>(
 }
 
 impl<'s, 'a> Builder<'s, 'a> {
+    fn restart_fair(&mut self) {
+        self.node_top = 1;
+        self.leaf_top = 0;
+        self.ref_top = 0;
+        self.pending = 0;
+        self.depth = 0;
+        self.truncated = false;
+        self.fair = true;
+    }
+
     /// Events of every non-degenerate primitive, sorted once per axis.
     fn root_task(&mut self) -> Task {
         let n = self.scene.prim_count();
@@ -247,6 +273,7 @@ impl<'s, 'a> Builder<'s, 'a> {
                 valid += 1;
             }
         }
+        self.frontier_refs = valid;
         let mut at = 0;
         let mut counts = [0; 3];
         for (axis, count) in counts.iter_mut().enumerate() {
@@ -288,7 +315,7 @@ impl<'s, 'a> Builder<'s, 'a> {
                     if self.pending == 0 {
                         return;
                     }
-                    let spare = task.ref_budget - task.prims;
+                    let spare = task.ref_budget.saturating_sub(task.prims);
                     self.pending -= 1;
                     task = stack[self.pending];
                     task.ref_budget += spare;
@@ -489,7 +516,13 @@ impl<'s, 'a> Builder<'s, 'a> {
         if !self.params.sah_termination && nl == n && nr == n {
             return None;
         }
-        if nl + nr > task.ref_budget {
+        let frontier = (self.frontier_refs + nl + nr).saturating_sub(n);
+        let fits = if self.fair {
+            nl + nr <= task.ref_budget
+        } else {
+            frontier <= self.refs.len()
+        };
+        if !fits {
             self.truncated = true;
             return None;
         }
@@ -521,7 +554,8 @@ impl<'s, 'a> Builder<'s, 'a> {
         let c = self.node_top as u32;
         self.node_top += 2;
         self.nodes[task.node as usize] = KdNode::interior(k, p, c);
-        let spare = task.ref_budget - nl - nr;
+        self.frontier_refs = frontier;
+        let spare = task.ref_budget.saturating_sub(nl + nr);
         let left_budget = nl + (spare as u128 * nl as u128 / (nl + nr).max(1) as u128) as usize;
         let left = Task {
             node: c,
@@ -539,7 +573,7 @@ impl<'s, 'a> Builder<'s, 'a> {
             start: base,
             counts: rcounts,
             prims: nr,
-            ref_budget: task.ref_budget - left_budget,
+            ref_budget: task.ref_budget.saturating_sub(left_budget),
         };
         Some((left, right))
     }

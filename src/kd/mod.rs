@@ -151,7 +151,9 @@ pub struct KdRequirements {
 /// pending subtrees plus one split's temporaries.
 ///
 /// A build given less (down to [`min_requirements`]) still succeeds; it
-/// stops splitting where room runs out and sets [`KD_FLAG_TRUNCATED`].
+/// stops splitting where room runs out and sets [`KD_FLAG_TRUNCATED`]. A
+/// scene may need more than `refs_per_prim` references per primitive (the
+/// SPD gears needs 8.2 under [`KdParams::auto`]); it is then truncated too.
 pub fn requirements(prim_count: usize, params: &KdParams) -> KdRequirements {
     let n = prim_count.max(1);
     let refs = n * params.refs_per_prim.max(1) as usize;
