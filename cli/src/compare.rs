@@ -74,13 +74,16 @@ pub fn compare(
         let a = tree.occluded(r, Traversal::Hierarchical, &mut st);
         if a != embree.occluded(r) {
             // Judge by the closest hits: a tie there explains the difference.
-            match classify(
-                r,
-                &tree.intersect(r, Traversal::Hierarchical, &mut st),
-                &embree.intersect(r),
-            ) {
+            let (ca, cb) = (
+                tree.intersect(r, Traversal::Hierarchical, &mut st),
+                embree.intersect(r),
+            );
+            match classify(r, &ca, &cb) {
                 Agreement::Mismatch | Agreement::Same => {
                     shadow_mismatches += 1;
+                    if shadow_mismatches <= 10 {
+                        println!("shadow ray {r:?}: coray occluded {a}, closest {ca:?}; Embree closest {cb:?}");
+                    }
                     paint(&mut image, owner.get(k).copied().unwrap_or(0), [0, 80, 255]);
                 }
                 _ => ties += 1,

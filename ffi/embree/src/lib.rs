@@ -183,8 +183,8 @@ pub enum Agreement {
     Same,
     /// Different primitives at the same distance (shared edges, coincident surfaces).
     TieSameDistance,
-    /// The nearer answer grazes: near a triangle edge, a cone's rim, or tangent
-    /// to the surface, where a rounding error turns a hit into a miss.
+    /// The nearer answer grazes (see [`grazing`]), where a rounding error
+    /// turns a hit into a miss.
     TieGrazing,
     /// Anything else.
     Mismatch,
@@ -195,8 +195,13 @@ pub fn tolerance(t: f32) -> f32 {
     1e-4 * t.abs().max(1.0)
 }
 
-/// True when rounding can turn `h` into a miss on `r`.
+/// True when rounding can turn `h` into a miss on `r`: near a triangle's
+/// edge, at a cone's rim, tangent to the surface, or within the tolerance
+/// of the ray's start (a ray leaving a surface meeting that surface again).
 pub fn grazing(r: &Ray, h: &Hit) -> bool {
+    if h.t < r.t_min + tolerance(r.t_min) {
+        return true;
+    }
     let edge = match h.geom_id {
         coray::geom::GEOM_TRIANGLES => h.u.min(h.v).min(1.0 - h.u - h.v) < 1e-4,
         coray::geom::GEOM_CONES => h.u < 1e-3 || h.u > 1.0 - 1e-3,
