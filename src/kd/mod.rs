@@ -18,7 +18,7 @@ pub use build::{build_sah, KdEvent};
 pub use node::{
     KdInfo, KdLeaf, KdNode, KdRopes, KD_FLAG_TRUNCATED, KD_MAGIC, KD_MAX_DEPTH, KD_VERSION, NO_NODE,
 };
-pub use traverse::Traversal;
+pub use traverse::{Decision, Traversal};
 pub use validate::KdTreeStats;
 
 use crate::{Error, Scene};

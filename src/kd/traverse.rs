@@ -22,15 +22,22 @@ pub enum Traversal {
 }
 
 /// What happens at a leaf: test its primitives; return true to stop.
-trait LeafVisitor {
+pub(crate) trait LeafVisitor {
     fn ray(&self) -> &PreparedRay;
     fn visit(&mut self, scene: &Scene, refs: &[u32], exit_t: f32) -> bool;
 }
 
-struct Closest {
-    ray: PreparedRay,
-    best: Hit,
-    tests: u64,
+/// Closest hit: keeps the nearest hit; stops once it lies within the leaf.
+pub(crate) struct Closest {
+    pub ray: PreparedRay,
+    pub best: Hit,
+    pub tests: u64,
+}
+
+impl Closest {
+    pub fn new(ray: &Ray) -> Closest {
+        Closest { ray: PreparedRay::new(ray), best: Hit::MISS, tests: 0 }
+    }
 }
 
 impl LeafVisitor for Closest {
@@ -41,11 +48,7 @@ impl LeafVisitor for Closest {
     fn visit(&mut self, scene: &Scene, refs: &[u32], exit_t: f32) -> bool {
         for &p in refs {
             self.tests += 1;
-            let t_max = if self.best.is_hit() {
-                self.best.t
-            } else {
-                self.ray.t_max
-            };
+            let t_max = if self.best.is_hit() { self.best.t } else { self.ray.t_max };
             if let Some(h) = scene.intersect_prim(p as usize, &self.ray, t_max) {
                 self.best = h;
             }
@@ -54,10 +57,11 @@ impl LeafVisitor for Closest {
     }
 }
 
-struct Any {
-    ray: PreparedRay,
-    hit: bool,
-    tests: u64,
+/// Any hit: stops at the first.
+pub(crate) struct Any {
+    pub ray: PreparedRay,
+    pub hit: bool,
+    pub tests: u64,
 }
 
 impl LeafVisitor for Any {
@@ -68,16 +72,79 @@ impl LeafVisitor for Any {
     fn visit(&mut self, scene: &Scene, refs: &[u32], _exit_t: f32) -> bool {
         for &p in refs {
             self.tests += 1;
-            if scene
-                .intersect_prim(p as usize, &self.ray, self.ray.t_max)
-                .is_some()
-            {
+            if scene.intersect_prim(p as usize, &self.ray, self.ray.t_max).is_some() {
                 self.hit = true;
                 return true;
             }
         }
         false
     }
+}
+
+/// The traversal decision at an interior node, as the LCTS paper names them:
+/// which children the ray visits, in which order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub enum Decision {
+    /// Only the left child.
+    Left = 0,
+    /// Only the right child.
+    Right = 1,
+    /// Left, then right.
+    LeftRight = 2,
+    /// Right, then left.
+    RightLeft = 3,
+}
+
+/// Observes a hierarchical traversal: the traversal history of the LCTS
+/// paper. Calls come in depth-first preorder of the visited nodes.
+pub(crate) trait Recorder {
+    /// An interior node was visited and decided `d`.
+    fn interior(&mut self, node: u32, d: Decision);
+    /// A leaf was visited.
+    fn leaf(&mut self, node: u32);
+    /// A node was pushed but not visited: the ray ended first.
+    fn unvisited(&mut self, node: u32);
+}
+
+/// The recorder of an ordinary traversal: records nothing, costs nothing.
+pub(crate) struct NoRecord;
+
+impl Recorder for NoRecord {
+    #[inline(always)]
+    fn interior(&mut self, _: u32, _: Decision) {}
+    #[inline(always)]
+    fn leaf(&mut self, _: u32) {}
+    #[inline(always)]
+    fn unvisited(&mut self, _: u32) {}
+}
+
+/// Steps counted in registers during a walk, added to [`TraceStats`] after.
+#[derive(Clone, Copy, Default)]
+pub(crate) struct Steps {
+    pub interior: u64,
+    pub leaves: u64,
+    pub empty: u64,
+}
+
+impl Steps {
+    pub fn flush(&self, stats: &mut TraceStats) {
+        stats.interior_steps += self.interior;
+        stats.leaf_steps += self.leaves;
+        stats.empty_leaf_steps += self.empty;
+        stats.traversal_steps += self.interior + self.leaves;
+    }
+}
+
+/// How a rope walk ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum RopeEnd {
+    /// The visitor stopped it (a hit, for closest hit within its leaf).
+    Stopped,
+    /// The ray left the scene or its segment ended.
+    Exited,
+    /// The ray lies in a split plane it must cross: hierarchical traversal must redo it.
+    Fallback,
 }
 
 /// An exit point of TA_B^rec: the node to visit after the current segment,
@@ -101,15 +168,13 @@ impl<'a> KdTree<'a> {
         if !ray.is_valid() {
             return Hit::MISS;
         }
-        let mut v = Closest {
-            ray: PreparedRay::new(ray),
-            best: Hit::MISS,
-            tests: 0,
-        };
+        let mut v = Closest::new(ray);
+        let mut steps = Steps::default();
         match method {
-            Traversal::Hierarchical => self.walk_hierarchical(&mut v, stats),
-            Traversal::Ropes => self.walk_ropes(&mut v, stats),
-        }
+            Traversal::Hierarchical => self.walk_hierarchical(&mut v, &mut NoRecord, &mut steps),
+            Traversal::Ropes => self.walk_ropes(&mut v, &mut steps),
+        };
+        steps.flush(stats);
         stats.prim_tests += v.tests;
         v.best
     }
@@ -120,78 +185,67 @@ impl<'a> KdTree<'a> {
         if !ray.is_valid() {
             return false;
         }
-        let mut v = Any {
-            ray: PreparedRay::new(ray),
-            hit: false,
-            tests: 0,
-        };
+        let mut v = Any { ray: PreparedRay::new(ray), hit: false, tests: 0 };
+        let mut steps = Steps::default();
         match method {
-            Traversal::Hierarchical => self.walk_hierarchical(&mut v, stats),
-            Traversal::Ropes => self.walk_ropes(&mut v, stats),
-        }
+            Traversal::Hierarchical => self.walk_hierarchical(&mut v, &mut NoRecord, &mut steps),
+            Traversal::Ropes => self.walk_ropes(&mut v, &mut steps),
+        };
+        steps.flush(stats);
         stats.prim_tests += v.tests;
         v.hit
     }
 
     /// Closest hits of many rays; `hits` must be as long as `rays`.
-    pub fn intersect_many(
-        &self,
-        rays: &[Ray],
-        hits: &mut [Hit],
-        method: Traversal,
-        stats: &mut TraceStats,
-    ) {
+    pub fn intersect_many(&self, rays: &[Ray], hits: &mut [Hit], method: Traversal, stats: &mut TraceStats) {
         for (r, h) in rays.iter().zip(hits.iter_mut()) {
             *h = self.intersect(r, method, stats);
         }
     }
 
     /// Any-hit answers for many rays; `out` must be as long as `rays`.
-    pub fn occluded_many(
-        &self,
-        rays: &[Ray],
-        out: &mut [bool],
-        method: Traversal,
-        stats: &mut TraceStats,
-    ) {
+    pub fn occluded_many(&self, rays: &[Ray], out: &mut [bool], method: Traversal, stats: &mut TraceStats) {
         for (r, o) in rays.iter().zip(out.iter_mut()) {
             *o = self.occluded(r, method, stats);
         }
     }
 
     #[inline]
-    fn leaf_refs(&self, node: KdNode) -> &[u32] {
+    pub(crate) fn leaf_refs(&self, node: KdNode) -> &[u32] {
         let l = self.leaves[node.index() as usize];
         &self.refs[l.first_ref as usize..(l.first_ref + l.ref_count) as usize]
     }
 
-    fn walk_hierarchical<V: LeafVisitor>(&self, v: &mut V, stats: &mut TraceStats) {
+    /// Hierarchical traversal from the root; true when the visitor stopped it.
+    pub(crate) fn walk_hierarchical<V: LeafVisitor, R: Recorder>(&self, v: &mut V, rec: &mut R, steps: &mut Steps) -> bool {
         let r = *v.ray();
-        let Some((t0, t1)) = self
-            .info
-            .bounds()
-            .clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max)
-        else {
-            return;
-        };
-        let mut stack = [ExitPoint {
-            node: NO_NODE,
-            t: 0.0,
-            p: Vec3::ZERO,
-        }; STACK_SIZE];
-        stack[0] = ExitPoint {
-            node: NO_NODE,
-            t: t1,
-            p: r.at(t1),
-        };
+        match self.info.bounds().clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max) {
+            Some((t0, t1)) => self.walk_from(v, rec, 0, t0, t1, steps),
+            None => false,
+        }
+    }
+
+    /// TA_B^rec over the subtree of `start`, for the ray's segment
+    /// `[t0, t1]` inside that node's box. True when the visitor stopped it.
+    pub(crate) fn walk_from<V: LeafVisitor, R: Recorder>(
+        &self,
+        v: &mut V,
+        rec: &mut R,
+        start: u32,
+        t0: f32,
+        t1: f32,
+        steps: &mut Steps,
+    ) -> bool {
+        let r = *v.ray();
+        let mut stack = [ExitPoint { node: NO_NODE, t: 0.0, p: Vec3::ZERO }; STACK_SIZE];
+        stack[0] = ExitPoint { node: NO_NODE, t: t1, p: r.at(t1) };
         let mut ex = 0usize;
         let mut en_p = r.at(t0);
-        let mut node = 0u32;
-        let (mut interior, mut leaves, mut empty) = (0u64, 0u64, 0u64);
-        'outer: loop {
+        let mut node = start;
+        loop {
             let mut nd = self.nodes[node as usize];
             while !nd.is_leaf() {
-                interior += 1;
+                steps.interior += 1;
                 let (a, s, left) = (nd.axis(), nd.split(), nd.index());
                 let ex_pa = stack[ex].p[a];
                 let far;
@@ -199,48 +253,62 @@ impl<'a> KdTree<'a> {
                     if ex_pa <= s {
                         if en_p[a] == s && ex_pa == s {
                             // The segment lies in the plane: left, then right again.
+                            rec.interior(node, Decision::LeftRight);
                             let x = stack[ex];
-                            stack[ex + 1] = ExitPoint {
-                                node: left + 1,
-                                t: 0.0,
-                                p: en_p,
-                            };
+                            stack[ex + 1] = ExitPoint { node: left + 1, t: 0.0, p: en_p };
                             stack[ex + 2] = ExitPoint { node: SKIP, ..x };
                             ex += 2;
+                        } else {
+                            rec.interior(node, Decision::Left);
                         }
-                        nd = self.nodes[left as usize];
+                        node = left;
+                        nd = self.nodes[node as usize];
                         continue;
                     }
                     if en_p[a] == s {
-                        nd = self.nodes[left as usize + 1];
+                        rec.interior(node, Decision::Right);
+                        node = left + 1;
+                        nd = self.nodes[node as usize];
                         continue;
                     }
+                    rec.interior(node, Decision::LeftRight);
                     far = left + 1;
-                    nd = self.nodes[left as usize];
+                    node = left;
                 } else {
                     if s < ex_pa {
-                        nd = self.nodes[left as usize + 1];
+                        rec.interior(node, Decision::Right);
+                        node = left + 1;
+                        nd = self.nodes[node as usize];
                         continue;
                     }
+                    rec.interior(node, Decision::RightLeft);
                     far = left;
-                    nd = self.nodes[left as usize + 1];
+                    node = left + 1;
                 }
+                nd = self.nodes[node as usize];
                 let t = (s - r.origin[a]) * r.inv_dir[a];
                 let mut p = r.at(t);
                 p[a] = s;
                 ex += 1;
                 stack[ex] = ExitPoint { node: far, t, p };
             }
-            leaves += 1;
+            steps.leaves += 1;
+            rec.leaf(node);
             let refs = self.leaf_refs(nd);
-            empty += refs.is_empty() as u64;
+            steps.empty += refs.is_empty() as u64;
             if v.visit(&self.scene, refs, stack[ex].t) {
-                break 'outer;
+                // What is still on the stack was pushed and never visited.
+                for e in stack[1..=ex].iter().rev() {
+                    if e.node != SKIP {
+                        rec.unvisited(e.node);
+                    }
+                }
+                return true;
             }
             loop {
                 let e = stack[ex];
                 if e.node == NO_NODE {
-                    break 'outer;
+                    return false;
                 }
                 ex -= 1;
                 en_p = e.p;
@@ -250,22 +318,18 @@ impl<'a> KdTree<'a> {
                 }
             }
         }
-        stats.interior_steps += interior;
-        stats.leaf_steps += leaves;
-        stats.empty_leaf_steps += empty;
-        stats.traversal_steps += interior + leaves;
     }
 
     /// Descends from `node` to the leaf holding `p`; a point on a split
     /// plane goes where the ray heads. `None` when the ray lies in the plane.
     #[inline]
-    fn locate(&self, mut node: u32, p: Vec3, d: Vec3, interior: &mut u64) -> Option<KdNode> {
+    pub(crate) fn locate(&self, mut node: u32, p: Vec3, d: Vec3, steps: &mut Steps) -> Option<KdNode> {
         loop {
             let nd = self.nodes[node as usize];
             if nd.is_leaf() {
                 return Some(nd);
             }
-            *interior += 1;
+            steps.interior += 1;
             let (a, s, left) = (nd.axis(), nd.split(), nd.index());
             node = if p[a] < s || (p[a] == s && d[a] < 0.0) {
                 left
@@ -277,66 +341,91 @@ impl<'a> KdTree<'a> {
         }
     }
 
-    fn walk_ropes<V: LeafVisitor>(&self, v: &mut V, stats: &mut TraceStats) {
+    /// Where the ray leaves leaf `nd`: the signed distance and the face.
+    #[inline]
+    pub(crate) fn leaf_exit(&self, r: &PreparedRay, nd: KdNode) -> (f32, usize) {
+        let rp = &self.ropes[nd.index() as usize];
+        let mut t_exit = f32::INFINITY;
+        let mut face = 0;
+        for a in 0..3 {
+            let (bound, f) = if r.dir[a] > 0.0 {
+                (rp.max[a], 2 * a + 1)
+            } else if r.dir[a] < 0.0 {
+                (rp.min[a], 2 * a)
+            } else {
+                continue;
+            };
+            let t = (bound - r.origin[a]) * r.inv_dir[a];
+            if t < t_exit {
+                t_exit = t;
+                face = f;
+            }
+        }
+        (t_exit, face)
+    }
+
+    /// The leaf beyond face `face` of leaf `nd` where the ray goes on after
+    /// `t_exit`: `Ok(None)` at the scene's boundary, `Err(())` when the ray
+    /// lies in a split plane there.
+    #[inline]
+    pub(crate) fn rope_next(
+        &self,
+        r: &PreparedRay,
+        nd: KdNode,
+        t_exit: f32,
+        face: usize,
+        steps: &mut Steps,
+    ) -> Result<Option<KdNode>, ()> {
+        let rp = &self.ropes[nd.index() as usize];
+        let next = rp.neighbor[face];
+        if next == NO_NODE {
+            return Ok(None);
+        }
+        let mut p = r.at(t_exit);
+        p[face / 2] = if face % 2 == 1 { rp.max[face / 2] } else { rp.min[face / 2] };
+        self.locate(next, p, r.dir, steps).map(Some).ok_or(())
+    }
+
+    /// Leaf to leaf by ropes from leaf `first` (not yet visited) until the
+    /// visitor stops or the segment ends at `t1`.
+    pub(crate) fn rope_walk<V: LeafVisitor>(&self, v: &mut V, first: KdNode, t1: f32, steps: &mut Steps) -> RopeEnd {
         let r = *v.ray();
-        let Some((t0, t1)) = self
-            .info
-            .bounds()
-            .clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max)
-        else {
-            return;
-        };
-        let (mut interior, mut leaves, mut empty) = (0u64, 0u64, 0u64);
-        let mut found = self.locate(0, r.at(t0), r.dir, &mut interior);
+        let mut nd = first;
         // A rope walk crosses each leaf at most once; the bound only guards
         // against a corrupt arena.
-        let mut budget = self.leaves.len() + 1;
-        let mut fallback = found.is_none();
-        while let Some(nd) = found {
-            leaves += 1;
+        for _ in 0..=self.leaves.len() {
+            steps.leaves += 1;
             let refs = self.leaf_refs(nd);
-            empty += refs.is_empty() as u64;
-            let rp = &self.ropes[nd.index() as usize];
-            let mut t_exit = f32::INFINITY;
-            let mut face = 0;
-            for a in 0..3 {
-                let (bound, f) = if r.dir[a] > 0.0 {
-                    (rp.max[a], 2 * a + 1)
-                } else if r.dir[a] < 0.0 {
-                    (rp.min[a], 2 * a)
-                } else {
-                    continue;
-                };
-                let t = (bound - r.origin[a]) * r.inv_dir[a];
-                if t < t_exit {
-                    t_exit = t;
-                    face = f;
-                }
+            steps.empty += refs.is_empty() as u64;
+            let (t_exit, face) = self.leaf_exit(&r, nd);
+            if v.visit(&self.scene, refs, t_exit.min(t1)) {
+                return RopeEnd::Stopped;
             }
-            if v.visit(&self.scene, refs, t_exit.min(t1)) || t_exit >= t1 {
-                break;
+            if t_exit >= t1 {
+                return RopeEnd::Exited;
             }
-            let next = rp.neighbor[face];
-            budget -= 1;
-            if next == NO_NODE || budget == 0 {
-                fallback = budget == 0;
-                break;
+            match self.rope_next(&r, nd, t_exit, face, steps) {
+                Ok(Some(next)) => nd = next,
+                Ok(None) => return RopeEnd::Exited,
+                Err(()) => return RopeEnd::Fallback,
             }
-            let mut p = r.at(t_exit);
-            p[face / 2] = if face % 2 == 1 {
-                rp.max[face / 2]
-            } else {
-                rp.min[face / 2]
-            };
-            found = self.locate(next, p, r.dir, &mut interior);
-            fallback = found.is_none();
         }
-        stats.interior_steps += interior;
-        stats.leaf_steps += leaves;
-        stats.empty_leaf_steps += empty;
-        stats.traversal_steps += interior + leaves;
-        if fallback {
-            self.walk_hierarchical(v, stats);
+        RopeEnd::Fallback
+    }
+
+    fn walk_ropes<V: LeafVisitor>(&self, v: &mut V, steps: &mut Steps) -> bool {
+        let r = *v.ray();
+        let Some((t0, t1)) = self.info.bounds().clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max) else {
+            return false;
+        };
+        let end = match self.locate(0, r.at(t0), r.dir, steps) {
+            Some(first) => self.rope_walk(v, first, t1, steps),
+            None => RopeEnd::Fallback,
+        };
+        match end {
+            RopeEnd::Stopped => true,
+            RopeEnd::Exited => false,
+            RopeEnd::Fallback => self.walk_hierarchical(v, &mut NoRecord, steps),
         }
     }
 }
