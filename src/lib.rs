@@ -19,6 +19,7 @@ pub mod arena;
 pub mod error;
 pub mod geom;
 pub mod kd;
+pub mod lcts;
 #[cfg(feature = "oracle")]
 pub mod oracle;
 pub mod stats;

@@ -61,6 +61,12 @@ pub struct Hit {
     pub prim_id: u32,
 }
 
+impl Default for Hit {
+    fn default() -> Hit {
+        Hit::MISS
+    }
+}
+
 impl Hit {
     /// The value reported for a ray that hits nothing.
     pub const MISS: Hit = Hit {

@@ -11,7 +11,7 @@
 mod build;
 mod node;
 mod ropes;
-mod traverse;
+pub(crate) mod traverse;
 mod validate;
 
 pub use build::{build_sah, KdEvent};

@@ -36,7 +36,11 @@ pub(crate) struct Closest {
 
 impl Closest {
     pub fn new(ray: &Ray) -> Closest {
-        Closest { ray: PreparedRay::new(ray), best: Hit::MISS, tests: 0 }
+        Closest {
+            ray: PreparedRay::new(ray),
+            best: Hit::MISS,
+            tests: 0,
+        }
     }
 }
 
@@ -48,7 +52,11 @@ impl LeafVisitor for Closest {
     fn visit(&mut self, scene: &Scene, refs: &[u32], exit_t: f32) -> bool {
         for &p in refs {
             self.tests += 1;
-            let t_max = if self.best.is_hit() { self.best.t } else { self.ray.t_max };
+            let t_max = if self.best.is_hit() {
+                self.best.t
+            } else {
+                self.ray.t_max
+            };
             if let Some(h) = scene.intersect_prim(p as usize, &self.ray, t_max) {
                 self.best = h;
             }
@@ -72,7 +80,10 @@ impl LeafVisitor for Any {
     fn visit(&mut self, scene: &Scene, refs: &[u32], _exit_t: f32) -> bool {
         for &p in refs {
             self.tests += 1;
-            if scene.intersect_prim(p as usize, &self.ray, self.ray.t_max).is_some() {
+            if scene
+                .intersect_prim(p as usize, &self.ray, self.ray.t_max)
+                .is_some()
+            {
                 self.hit = true;
                 return true;
             }
@@ -185,7 +196,11 @@ impl<'a> KdTree<'a> {
         if !ray.is_valid() {
             return false;
         }
-        let mut v = Any { ray: PreparedRay::new(ray), hit: false, tests: 0 };
+        let mut v = Any {
+            ray: PreparedRay::new(ray),
+            hit: false,
+            tests: 0,
+        };
         let mut steps = Steps::default();
         match method {
             Traversal::Hierarchical => self.walk_hierarchical(&mut v, &mut NoRecord, &mut steps),
@@ -197,14 +212,26 @@ impl<'a> KdTree<'a> {
     }
 
     /// Closest hits of many rays; `hits` must be as long as `rays`.
-    pub fn intersect_many(&self, rays: &[Ray], hits: &mut [Hit], method: Traversal, stats: &mut TraceStats) {
+    pub fn intersect_many(
+        &self,
+        rays: &[Ray],
+        hits: &mut [Hit],
+        method: Traversal,
+        stats: &mut TraceStats,
+    ) {
         for (r, h) in rays.iter().zip(hits.iter_mut()) {
             *h = self.intersect(r, method, stats);
         }
     }
 
     /// Any-hit answers for many rays; `out` must be as long as `rays`.
-    pub fn occluded_many(&self, rays: &[Ray], out: &mut [bool], method: Traversal, stats: &mut TraceStats) {
+    pub fn occluded_many(
+        &self,
+        rays: &[Ray],
+        out: &mut [bool],
+        method: Traversal,
+        stats: &mut TraceStats,
+    ) {
         for (r, o) in rays.iter().zip(out.iter_mut()) {
             *o = self.occluded(r, method, stats);
         }
@@ -217,9 +244,18 @@ impl<'a> KdTree<'a> {
     }
 
     /// Hierarchical traversal from the root; true when the visitor stopped it.
-    pub(crate) fn walk_hierarchical<V: LeafVisitor, R: Recorder>(&self, v: &mut V, rec: &mut R, steps: &mut Steps) -> bool {
+    pub(crate) fn walk_hierarchical<V: LeafVisitor, R: Recorder>(
+        &self,
+        v: &mut V,
+        rec: &mut R,
+        steps: &mut Steps,
+    ) -> bool {
         let r = *v.ray();
-        match self.info.bounds().clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max) {
+        match self
+            .info
+            .bounds()
+            .clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max)
+        {
             Some((t0, t1)) => self.walk_from(v, rec, 0, t0, t1, steps),
             None => false,
         }
@@ -237,8 +273,16 @@ impl<'a> KdTree<'a> {
         steps: &mut Steps,
     ) -> bool {
         let r = *v.ray();
-        let mut stack = [ExitPoint { node: NO_NODE, t: 0.0, p: Vec3::ZERO }; STACK_SIZE];
-        stack[0] = ExitPoint { node: NO_NODE, t: t1, p: r.at(t1) };
+        let mut stack = [ExitPoint {
+            node: NO_NODE,
+            t: 0.0,
+            p: Vec3::ZERO,
+        }; STACK_SIZE];
+        stack[0] = ExitPoint {
+            node: NO_NODE,
+            t: t1,
+            p: r.at(t1),
+        };
         let mut ex = 0usize;
         let mut en_p = r.at(t0);
         let mut node = start;
@@ -255,7 +299,11 @@ impl<'a> KdTree<'a> {
                             // The segment lies in the plane: left, then right again.
                             rec.interior(node, Decision::LeftRight);
                             let x = stack[ex];
-                            stack[ex + 1] = ExitPoint { node: left + 1, t: 0.0, p: en_p };
+                            stack[ex + 1] = ExitPoint {
+                                node: left + 1,
+                                t: 0.0,
+                                p: en_p,
+                            };
                             stack[ex + 2] = ExitPoint { node: SKIP, ..x };
                             ex += 2;
                         } else {
@@ -323,7 +371,13 @@ impl<'a> KdTree<'a> {
     /// Descends from `node` to the leaf holding `p`; a point on a split
     /// plane goes where the ray heads. `None` when the ray lies in the plane.
     #[inline]
-    pub(crate) fn locate(&self, mut node: u32, p: Vec3, d: Vec3, steps: &mut Steps) -> Option<KdNode> {
+    pub(crate) fn locate(
+        &self,
+        mut node: u32,
+        p: Vec3,
+        d: Vec3,
+        steps: &mut Steps,
+    ) -> Option<KdNode> {
         loop {
             let nd = self.nodes[node as usize];
             if nd.is_leaf() {
@@ -382,13 +436,23 @@ impl<'a> KdTree<'a> {
             return Ok(None);
         }
         let mut p = r.at(t_exit);
-        p[face / 2] = if face % 2 == 1 { rp.max[face / 2] } else { rp.min[face / 2] };
+        p[face / 2] = if face % 2 == 1 {
+            rp.max[face / 2]
+        } else {
+            rp.min[face / 2]
+        };
         self.locate(next, p, r.dir, steps).map(Some).ok_or(())
     }
 
     /// Leaf to leaf by ropes from leaf `first` (not yet visited) until the
     /// visitor stops or the segment ends at `t1`.
-    pub(crate) fn rope_walk<V: LeafVisitor>(&self, v: &mut V, first: KdNode, t1: f32, steps: &mut Steps) -> RopeEnd {
+    pub(crate) fn rope_walk<V: LeafVisitor>(
+        &self,
+        v: &mut V,
+        first: KdNode,
+        t1: f32,
+        steps: &mut Steps,
+    ) -> RopeEnd {
         let r = *v.ray();
         let mut nd = first;
         // A rope walk crosses each leaf at most once; the bound only guards
@@ -401,7 +465,7 @@ impl<'a> KdTree<'a> {
             if v.visit(&self.scene, refs, t_exit.min(t1)) {
                 return RopeEnd::Stopped;
             }
-            if t_exit >= t1 {
+            if t_exit > t1 {
                 return RopeEnd::Exited;
             }
             match self.rope_next(&r, nd, t_exit, face, steps) {
@@ -415,7 +479,11 @@ impl<'a> KdTree<'a> {
 
     fn walk_ropes<V: LeafVisitor>(&self, v: &mut V, steps: &mut Steps) -> bool {
         let r = *v.ray();
-        let Some((t0, t1)) = self.info.bounds().clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max) else {
+        let Some((t0, t1)) = self
+            .info
+            .bounds()
+            .clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max)
+        else {
             return false;
         };
         let end = match self.locate(0, r.at(t0), r.dir, steps) {

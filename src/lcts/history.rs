@@ -1,0 +1,105 @@
+//! Traversal histories: what a ray's hierarchical traversal visited, in
+//! depth-first preorder, each interior node with its decision (the LCTS
+//! paper's traversal tree, flattened), leaves, and nodes pushed but never
+//! visited because the ray ended first.
+
+use crate::kd::traverse::{Closest, Recorder, Steps};
+use crate::kd::{Decision, KdTree};
+use crate::{Hit, Ray, TraceStats};
+
+/// Kind of a [`HistoryRecord`] beyond the four decisions (0 to 3).
+pub const KIND_LEAF: u32 = 4;
+/// The node was pushed on the traversal stack but never visited.
+pub const KIND_UNVISITED: u32 = 5;
+
+/// One visited (or pushed) node. Plain data: `word` holds the kind in the
+/// low 3 bits ([`Decision`] as 0 to 3, [`KIND_LEAF`], [`KIND_UNVISITED`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[repr(C)]
+pub struct HistoryRecord {
+    /// Node index in the tree.
+    pub node: u32,
+    /// Kind in bits 0 to 2.
+    pub word: u32,
+}
+
+impl HistoryRecord {
+    /// The record's kind.
+    #[inline]
+    pub fn kind(&self) -> u32 {
+        self.word & 7
+    }
+}
+
+/// A ray's history in a caller buffer, and the ray's hit.
+#[derive(Debug)]
+pub struct History<'b> {
+    /// The buffer; `len` records are used.
+    pub records: &'b mut [HistoryRecord],
+    /// Records written.
+    pub len: usize,
+    /// The traversal did not fit: the history is unusable for sharing.
+    pub overflow: bool,
+    /// The ray's closest hit.
+    pub hit: Hit,
+}
+
+impl<'b> History<'b> {
+    /// An empty history over `records`.
+    pub fn new(records: &'b mut [HistoryRecord]) -> History<'b> {
+        History {
+            records,
+            len: 0,
+            overflow: false,
+            hit: Hit::MISS,
+        }
+    }
+
+    /// The records, or `None` when they did not fit.
+    pub fn get(&self) -> Option<&[HistoryRecord]> {
+        (!self.overflow).then(|| &self.records[..self.len])
+    }
+
+    fn push(&mut self, node: u32, kind: u32) {
+        if self.len < self.records.len() {
+            self.records[self.len] = HistoryRecord { node, word: kind };
+            self.len += 1;
+        } else {
+            self.overflow = true;
+        }
+    }
+}
+
+impl Recorder for History<'_> {
+    #[inline]
+    fn interior(&mut self, node: u32, d: Decision) {
+        self.push(node, d as u32);
+    }
+    #[inline]
+    fn leaf(&mut self, node: u32) {
+        self.push(node, KIND_LEAF);
+    }
+    #[inline]
+    fn unvisited(&mut self, node: u32) {
+        self.push(node, KIND_UNVISITED);
+    }
+}
+
+/// Traces `ray` hierarchically from the root, recording its history into
+/// `h` (cleared first). The hit is exactly that of
+/// [`KdTree::intersect`] with hierarchical traversal.
+pub fn trace_recorded(tree: &KdTree, ray: &Ray, h: &mut History, stats: &mut TraceStats) {
+    h.len = 0;
+    h.overflow = false;
+    h.hit = Hit::MISS;
+    stats.rays += 1;
+    if !ray.is_valid() {
+        return;
+    }
+    let mut v = Closest::new(ray);
+    let mut steps = Steps::default();
+    tree.walk_hierarchical(&mut v, h, &mut steps);
+    steps.flush(stats);
+    stats.prim_tests += v.tests;
+    h.hit = v.best;
+}

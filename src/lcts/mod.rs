@@ -1,0 +1,23 @@
+//! The Longest Common Traversal Sequence (Havran and Bittner 2000): rays in
+//! a convex shaft whose boundary rays traverse the kd-tree alike can skip
+//! what they have in common.
+//!
+//! - [`history`]: traversal histories of boundary rays, in caller buffers;
+//! - [`slcts`]: the common sequence of leaves (SLCTS), unification of empty
+//!   leaves, the termination object, and tracing a ray along it then by ropes;
+//! - [`image`]: hidden-surface removal by image casting (SLCTS-1D and -2D
+//!   undersampling windows; hierarchical and rope traversal as references).
+//!
+//! Every scheme is exact: each pixel gets the primitive and the `t` that
+//! hierarchical traversal gives it. A boundary ray whose history does not
+//! fit its buffer simply shares nothing; its window falls back to ordinary
+//! traversal, so buffer sizes change speed, never results.
+
+pub mod history;
+pub mod image;
+pub mod slcts;
+
+pub use history::{History, HistoryRecord};
+pub use image::{
+    cast_image, image_requirements, CastStats, CornerInfo, ImageRequirements, ImageScratch, Scheme,
+};

@@ -1,0 +1,207 @@
+//! The simple LCTS: the leaves every boundary ray of a shaft visits first,
+//! in the same order. A ray inside the shaft visits them too (the shaft and
+//! the cells are convex), so it tests their primitives without any descent,
+//! and if it finds no hit there goes on by ropes from the last of them.
+
+use super::history::{HistoryRecord, KIND_LEAF};
+use crate::kd::traverse::{Closest, NoRecord, RopeEnd, Steps};
+use crate::kd::KdTree;
+use crate::{Hit, Ray, TraceStats};
+
+/// Marks a sequence entry standing for a run of empty leaves (unification
+/// of empty leaves, section 4.3.1): the run costs one step and no test.
+pub const EMPTY_RUN: u32 = 1 << 31;
+
+/// A shaft's common leaf sequence in a caller buffer.
+#[derive(Debug)]
+pub struct Slcts<'b> {
+    /// Leaf node indices; an entry with [`EMPTY_RUN`] set is the last leaf
+    /// of a run of empty leaves.
+    pub entries: &'b mut [u32],
+    /// Entries used.
+    pub len: usize,
+    /// The termination object (section 4.3.2): a global primitive index
+    /// that every ray of the shaft hits first, if one was established.
+    pub termination: Option<u32>,
+    /// Leaves the sequence covers (before unification).
+    pub leaves: usize,
+}
+
+/// Builds the SLCTS of boundary rays with histories `histories` (each
+/// `None` when its history overflowed: then nothing is shared) into
+/// `entries`. `hits` are the boundary rays' hits, for the termination object.
+pub fn build<'b>(
+    tree: &KdTree,
+    histories: &[Option<&[HistoryRecord]>],
+    hits: &[Hit],
+    entries: &'b mut [u32],
+) -> Slcts<'b> {
+    let mut s = Slcts {
+        entries,
+        len: 0,
+        termination: None,
+        leaves: 0,
+    };
+    if histories.is_empty() || histories.iter().any(|h| h.is_none()) {
+        return s;
+    }
+    // Walk the leaf records of every history in lockstep.
+    let mut pos = [0usize; 8];
+    let k = histories.len().min(pos.len());
+    let next_leaf = |h: &[HistoryRecord], p: &mut usize| -> Option<u32> {
+        while *p < h.len() {
+            let r = h[*p];
+            *p += 1;
+            if r.kind() == KIND_LEAF {
+                return Some(r.node);
+            }
+        }
+        None
+    };
+    let mut last_empty = false;
+    while let Some(first) = next_leaf(histories[0].unwrap(), &mut pos[0]) {
+        let mut same = true;
+        for i in 1..k {
+            if next_leaf(histories[i].unwrap(), &mut pos[i]) != Some(first) {
+                same = false;
+            }
+        }
+        if !same {
+            break;
+        }
+        let empty = tree.leaf_refs(tree.nodes[first as usize]).is_empty();
+        s.leaves += 1;
+        if empty && last_empty && s.len > 0 {
+            // Unification: the run grows; its entry now ends here.
+            s.entries[s.len - 1] = first | EMPTY_RUN;
+            continue;
+        }
+        if s.len == s.entries.len() {
+            break;
+        }
+        s.entries[s.len] = if empty { first | EMPTY_RUN } else { first };
+        s.len += 1;
+        last_empty = empty;
+    }
+    s.termination = termination_object(tree, &s, hits, histories);
+    s
+}
+
+/// The last leaf a history visited.
+fn last_leaf(h: &[HistoryRecord]) -> Option<u32> {
+    h.iter()
+        .rev()
+        .find(|r| r.kind() == KIND_LEAF)
+        .map(|r| r.node)
+}
+
+/// Section 4.3.2: every boundary ray hits the same convex primitive O and
+/// ends in the same leaf C, O is the only primitive of C, and C is the
+/// first entry of the sequence or the second after a run of empty leaves.
+fn termination_object(
+    tree: &KdTree,
+    s: &Slcts,
+    hits: &[Hit],
+    histories: &[Option<&[HistoryRecord]>],
+) -> Option<u32> {
+    let first = hits.first()?;
+    if !first.is_hit()
+        || hits
+            .iter()
+            .any(|h| (h.geom_id, h.prim_id) != (first.geom_id, first.prim_id))
+    {
+        return None;
+    }
+    let scene = &tree.scene;
+    let global = match first.geom_id {
+        crate::geom::GEOM_TRIANGLES => first.prim_id,
+        crate::geom::GEOM_SPHERES => scene.triangles.len() as u32 + first.prim_id,
+        _ => return None, // cones are not convex
+    };
+    let c = match s.entries[..s.len] {
+        [c, ..] if c & EMPTY_RUN == 0 => c,
+        [e, c, ..] if e & EMPTY_RUN != 0 && c & EMPTY_RUN == 0 => c,
+        _ => return None,
+    };
+    // Condition 1: every boundary ray ended in C.
+    if histories.iter().any(|h| h.and_then(last_leaf) != Some(c)) {
+        return None;
+    }
+    let refs = tree.leaf_refs(tree.nodes[c as usize]);
+    (refs == [global]).then_some(global)
+}
+
+/// Traces `ray`, which lies inside the shaft of `s`, exactly as
+/// hierarchical traversal would answer: the termination object when there
+/// is one, else the sequence's leaves, then ropes from the last of them.
+pub fn trace(tree: &KdTree, s: &Slcts, ray: &Ray, stats: &mut TraceStats) -> Hit {
+    stats.rays += 1;
+    if !ray.is_valid() {
+        return Hit::MISS;
+    }
+    let mut v = Closest::new(ray);
+    let mut steps = Steps::default();
+    if let Some(o) = s.termination {
+        v.tests += 1;
+        if let Some(h) = tree.scene.intersect_prim(o as usize, &v.ray, ray.t_max) {
+            stats.prim_tests += 1;
+            // The leaves before C are empty: one step for them (unified), one for C.
+            stats.leaf_steps += s.len.min(2) as u64;
+            stats.traversal_steps += s.len.min(2) as u64;
+            return h;
+        }
+        // Rounding: fall through to the sequence.
+    }
+    let r = v.ray;
+    let root = tree
+        .info
+        .bounds()
+        .clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max);
+    let done = match root {
+        None => true,
+        Some((_, t1)) => walk_sequence(tree, s, &mut v, t1, &mut steps),
+    };
+    if !done {
+        v.best = Hit::MISS;
+        tree.walk_hierarchical(&mut v, &mut NoRecord, &mut steps);
+    }
+    steps.flush(stats);
+    stats.prim_tests += v.tests;
+    v.best
+}
+
+/// The sequence, then ropes. False when the ray must be redone
+/// hierarchically (it lies in a split plane it crosses, or the sequence is empty).
+fn walk_sequence(tree: &KdTree, s: &Slcts, v: &mut Closest, t1: f32, steps: &mut Steps) -> bool {
+    if s.len == 0 {
+        return false;
+    }
+    let r = v.ray;
+    for &e in &s.entries[..s.len] {
+        steps.leaves += 1;
+        let nd = tree.nodes[(e & !EMPTY_RUN) as usize];
+        if e & EMPTY_RUN != 0 {
+            steps.empty += 1;
+            continue;
+        }
+        let (t_exit, _) = tree.leaf_exit(&r, nd);
+        if crate::kd::traverse::LeafVisitor::visit(
+            v,
+            &tree.scene,
+            tree.leaf_refs(nd),
+            t_exit.min(t1),
+        ) {
+            return true;
+        }
+    }
+    let last = tree.nodes[(s.entries[s.len - 1] & !EMPTY_RUN) as usize];
+    let (t_exit, face) = tree.leaf_exit(&r, last);
+    if t_exit > t1 {
+        return true;
+    }
+    match tree.rope_next(&r, last, t_exit, face, steps) {
+        Ok(None) => true,
+        Ok(Some(next)) => tree.rope_walk(v, next, t1, steps) != RopeEnd::Fallback,
+        Err(()) => false,
+    }
+}
