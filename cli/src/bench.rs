@@ -6,6 +6,9 @@
 use crate::kdbuild::OwnedKd;
 use crate::scene::SceneData;
 use coray::kd::{KdParams, Traversal};
+use coray::lcts::{
+    cast_image, image_requirements, CornerInfo, HistoryRecord, ImageScratch, Scheme,
+};
 use coray::{Hit, Ray, TraceStats};
 use std::time::Instant;
 
@@ -25,11 +28,17 @@ pub struct Row {
     pub isect_per_ray: Option<f64>,
     pub mismatches: usize,
     pub truncated: bool,
+    /// LCTS schemes: share of windows whose common sequence holds a leaf.
+    pub gamma: Option<f64>,
 }
 
 impl Row {
     pub fn primary_mrays(&self) -> f64 {
         self.primary_rays as f64 / self.primary_s / 1e6
+    }
+    /// None when the method traced no shadow rays (LCTS casts primary rays only).
+    pub fn shadow_mrays_opt(&self) -> Option<f64> {
+        (self.shadow_rays > 0).then(|| self.shadow_mrays())
     }
     pub fn shadow_mrays(&self) -> f64 {
         self.shadow_rays as f64 / self.shadow_s / 1e6
@@ -144,6 +153,7 @@ pub fn run_kd(
             isect_per_ray: Some(stats.prim_tests as f64 / n),
             mismatches: 0,
             truncated: owned.info.truncated(),
+            gamma: None,
         },
         hits,
         shadowed,
@@ -179,7 +189,7 @@ pub fn run_embree(s: &SceneData, primary: &[Ray], shadow: &[Ray], repeat: usize)
 
 /// Every method coray has (and Embree when built with it).
 pub fn all_methods() -> Vec<&'static str> {
-    let mut m = vec!["kd", "kd-rope"];
+    let mut m = vec!["kd", "kd-rope", "slcts1d", "slcts2d"];
     if cfg!(feature = "embree") {
         m.push("embree");
     }
@@ -226,6 +236,8 @@ pub fn bench(
                 hits: reference.hits.clone(),
                 shadowed: reference.shadowed.clone(),
             },
+            "slcts1d" => run_lcts(s, params, Scheme::Slcts1d { n: 5 }, "slcts1d", repeat)?,
+            "slcts2d" => run_lcts(s, params, Scheme::Slcts2d { n: 5, m: 5 }, "slcts2d", repeat)?,
             "kd-rope" => run_kd(
                 s,
                 params,
@@ -260,6 +272,64 @@ pub fn bench(
         rows.push(row);
     }
     Ok(rows)
+}
+
+/// An LCTS image-casting scheme on the camera's primary rays. Its
+/// mismatches are pixels whose primitive or t differ from hierarchical
+/// casting of the same rays (the scheme's exactness).
+pub fn run_lcts(
+    s: &SceneData,
+    params: &KdParams,
+    scheme: Scheme,
+    name: &str,
+    repeat: usize,
+) -> Result<Traced, String> {
+    let owned = OwnedKd::build(&s.mesh.scene(), params)?;
+    let tree = owned.tree(s.mesh.scene());
+    let cam = &s.mesh.camera;
+    let n = (cam.width * cam.height) as usize;
+    let req = image_requirements(cam.width, scheme, 512);
+    let mut records = vec![HistoryRecord::default(); req.records];
+    let mut entries = vec![0u32; req.entries];
+    let mut corners = vec![CornerInfo::default(); req.corners];
+    let (mut t, mut p) = (vec![0.0f32; n], vec![0u32; n]);
+    let (mut t_ref, mut p_ref) = (vec![0.0f32; n], vec![0u32; n]);
+    let mut cast = |scheme: Scheme, t: &mut [f32], p: &mut [u32]| {
+        let scratch = ImageScratch {
+            records: &mut records,
+            entries: &mut entries,
+            corners: &mut corners,
+        };
+        cast_image(&tree, cam, scheme, scratch, t, p).map_err(|e| e.to_string())
+    };
+    cast(Scheme::Hierarchical, &mut t_ref, &mut p_ref)?;
+    let mut cs = None;
+    let (primary_s, ()) = best_of(repeat, || {
+        cs = Some(cast(scheme, &mut t, &mut p));
+    });
+    let cs = cs.unwrap()?;
+    let mismatches = (0..n)
+        .filter(|&i| p[i] != p_ref[i] || t[i].to_bits() != t_ref[i].to_bits())
+        .count();
+    let rays = cs.trace.rays.max(1) as f64;
+    Ok(Traced {
+        row: Row {
+            method: name.to_string(),
+            build_ms: owned.build_ms,
+            arena_bytes: Some(owned.arena_bytes()),
+            primary_s,
+            shadow_s: 0.0,
+            primary_rays: n,
+            shadow_rays: 0,
+            tspr: Some(cs.trace.traversal_steps as f64 / rays),
+            isect_per_ray: Some(cs.trace.prim_tests as f64 / rays),
+            mismatches,
+            truncated: owned.info.truncated(),
+            gamma: Some(cs.gamma()),
+        },
+        hits: Vec::new(),
+        shadowed: Vec::new(),
+    })
 }
 
 /// Rays where Embree's hit differs from coray's beyond a documented tie.
@@ -319,7 +389,7 @@ pub fn print_table(s: &SceneData, rows: &[Row]) {
         let eta = kd.map(|k| r.primary_s / k.primary_s);
         let vs_embree = embree.map(|e| r.primary_mrays() / e.primary_mrays());
         println!(
-            "{:<10} {:>9.1} {:>11} {:>7} {:>9.3} {:>9.3} {:>7} {:>8} {:>6} {:>6} {:>9} {:>9} {:>5}",
+            "{:<10} {:>9.1} {:>11} {:>7} {:>9.3} {:>9} {:>7} {:>8} {:>6} {:>6} {:>9} {:>9} {:>5}",
             r.method,
             r.build_ms,
             r.arena_bytes.map_or("-".into(), |b| b.to_string()),
@@ -328,7 +398,7 @@ pub fn print_table(s: &SceneData, rows: &[Row]) {
                 b as f64 / s.prim_count().max(1) as f64
             )),
             r.primary_mrays(),
-            r.shadow_mrays(),
+            opt(r.shadow_mrays_opt(), 3),
             opt(r.tspr, 2),
             opt(r.isect_per_ray, 2),
             opt(alpha, 3),
@@ -342,7 +412,7 @@ pub fn print_table(s: &SceneData, rows: &[Row]) {
         println!(
             "ratios to Embree, shadow rays: {}",
             rows.iter()
-                .filter(|r| r.method != "embree")
+                .filter(|r| r.method != "embree" && r.shadow_rays > 0)
                 .map(|r| format!("{} {:.3}", r.method, r.shadow_mrays() / e.shadow_mrays()))
                 .collect::<Vec<_>>()
                 .join(", ")
@@ -367,18 +437,19 @@ pub fn to_json(s: &SceneData, rows: &[Row]) -> String {
             let eta = kd.map(|k| r.primary_s / k.primary_s);
             format!(
                 "{{\"method\": \"{}\", \"build_ms\": {}, \"arena_bytes\": {}, \"primary_mrays\": {}, \"shadow_mrays\": {}, \
-                 \"tspr\": {}, \"isect_per_ray\": {}, \"alpha\": {}, \"eta\": {}, \"mismatches\": {}, \"truncated\": {}}}",
+                 \"tspr\": {}, \"isect_per_ray\": {}, \"alpha\": {}, \"eta\": {}, \"mismatches\": {}, \"truncated\": {}, \"gamma\": {}}}",
                 r.method,
                 json_num(Some(r.build_ms)),
                 r.arena_bytes.map_or("null".into(), |b| b.to_string()),
                 json_num(Some(r.primary_mrays())),
-                json_num(Some(r.shadow_mrays())),
+                json_num(r.shadow_mrays_opt()),
                 json_num(r.tspr),
                 json_num(r.isect_per_ray),
                 json_num(alpha),
                 json_num(eta),
                 r.mismatches,
-                r.truncated
+                r.truncated,
+                json_num(r.gamma)
             )
         })
         .collect();
