@@ -210,9 +210,10 @@ pub fn cast_image(
                     got: scratch.records.len(),
                 });
             }
-            let (mut top, mut bottom) = scratch
-                .records
-                .split_at_mut(if m == 1 { 0 } else { cols * cap });
+            let (mut top, mut bottom) =
+                scratch
+                    .records
+                    .split_at_mut(if m == 1 { 0 } else { cols * cap });
             if scratch.corners.len() < rows_kept * cols {
                 let needed = rows_kept * cols;
                 return Err(Error::SliceTooSmall {
