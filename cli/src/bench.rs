@@ -6,6 +6,7 @@
 use crate::kdbuild::OwnedKd;
 use crate::scene::SceneData;
 use coray::kd::{KdParams, Traversal};
+use coray::lcts::hlcts::HlctsEntry;
 use coray::lcts::{
     cast_image, image_requirements, CornerInfo, HistoryRecord, ImageScratch, Scheme,
 };
@@ -189,7 +190,7 @@ pub fn run_embree(s: &SceneData, primary: &[Ray], shadow: &[Ray], repeat: usize)
 
 /// Every method coray has (and Embree when built with it).
 pub fn all_methods() -> Vec<&'static str> {
-    let mut m = vec!["kd", "kd-rope", "slcts1d", "slcts2d"];
+    let mut m = vec!["kd", "kd-rope", "slcts1d", "slcts2d", "hlcts1d", "hlcts2d"];
     if cfg!(feature = "embree") {
         m.push("embree");
     }
@@ -238,6 +239,8 @@ pub fn bench(
             },
             "slcts1d" => run_lcts(s, params, Scheme::Slcts1d { n: 5 }, "slcts1d", repeat)?,
             "slcts2d" => run_lcts(s, params, Scheme::Slcts2d { n: 5, m: 5 }, "slcts2d", repeat)?,
+            "hlcts1d" => run_lcts(s, params, Scheme::Hlcts1d, "hlcts1d", repeat)?,
+            "hlcts2d" => run_lcts(s, params, Scheme::Hlcts2d, "hlcts2d", repeat)?,
             "kd-rope" => run_kd(
                 s,
                 params,
@@ -288,10 +291,12 @@ pub fn run_lcts(
     let tree = owned.tree(s.mesh.scene());
     let cam = &s.mesh.camera;
     let n = (cam.width * cam.height) as usize;
-    let req = image_requirements(cam.width, scheme, 512);
+    let req = image_requirements(cam.width, cam.height, scheme, 512);
     let mut records = vec![HistoryRecord::default(); req.records];
     let mut entries = vec![0u32; req.entries];
     let mut corners = vec![CornerInfo::default(); req.corners];
+    let mut starts = vec![0u32; req.starts];
+    let mut hlcts = vec![HlctsEntry::default(); req.hlcts];
     let (mut t, mut p) = (vec![0.0f32; n], vec![0u32; n]);
     let (mut t_ref, mut p_ref) = (vec![0.0f32; n], vec![0u32; n]);
     let mut cast = |scheme: Scheme, t: &mut [f32], p: &mut [u32]| {
@@ -299,6 +304,8 @@ pub fn run_lcts(
             records: &mut records,
             entries: &mut entries,
             corners: &mut corners,
+            starts: &mut starts,
+            hlcts: &mut hlcts,
         };
         cast_image(&tree, cam, scheme, scratch, t, p).map_err(|e| e.to_string())
     };
@@ -311,7 +318,8 @@ pub fn run_lcts(
     let mismatches = (0..n)
         .filter(|&i| p[i] != p_ref[i] || t[i].to_bits() != t_ref[i].to_bits())
         .count();
-    let rays = cs.trace.rays.max(1) as f64;
+    // Per pixel: the 2D bisection traces some rays twice, and that work counts.
+    let rays = n.max(1) as f64;
     Ok(Traced {
         row: Row {
             method: name.to_string(),

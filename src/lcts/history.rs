@@ -13,7 +13,9 @@ pub const KIND_LEAF: u32 = 4;
 pub const KIND_UNVISITED: u32 = 5;
 
 /// One visited (or pushed) node. Plain data: `word` holds the kind in the
-/// low 3 bits ([`Decision`] as 0 to 3, [`KIND_LEAF`], [`KIND_UNVISITED`]).
+/// low 3 bits ([`Decision`] as 0 to 3, [`KIND_LEAF`], [`KIND_UNVISITED`])
+/// and, once [`fill_lengths`] ran, the number of records of the node's
+/// subtree above them (so a subtree can be skipped in O(1)).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[repr(C)]
 pub struct HistoryRecord {
@@ -28,6 +30,54 @@ impl HistoryRecord {
     #[inline]
     pub fn kind(&self) -> u32 {
         self.word & 7
+    }
+
+    /// Records in this node's subtree, itself included.
+    #[inline]
+    pub fn subtree_len(&self) -> usize {
+        (self.word >> 3) as usize
+    }
+}
+
+/// Children recorded after a record of `kind` (preorder).
+fn arity(kind: u32) -> usize {
+    match kind {
+        0 | 1 => 1,
+        2 | 3 => 2,
+        _ => 0,
+    }
+}
+
+/// Stores each record's subtree length in its word. `records` must be a
+/// sequence of whole subtrees in preorder (what a traversal records); a
+/// truncated subtree at the end is left with partial lengths.
+pub fn fill_lengths(records: &mut [HistoryRecord]) {
+    // Open ancestors and how many children each still waits for: at most
+    // one per level of the tree.
+    let mut open = [(0usize, 0usize); crate::kd::KD_MAX_DEPTH as usize + 2];
+    let mut sp = 0usize;
+    for i in 0..records.len() {
+        let kind = records[i].kind();
+        records[i].word = kind | (1 << 3);
+        let a = arity(kind);
+        if a > 0 && sp < open.len() {
+            open[sp] = (i, a);
+            sp += 1;
+            continue;
+        }
+        // Record i is a whole subtree: add it to its ancestors.
+        let mut done = i;
+        while sp > 0 {
+            let (p, rem) = open[sp - 1];
+            let add = records[done].subtree_len() as u32;
+            records[p].word += add << 3;
+            if rem > 1 {
+                open[sp - 1].1 = rem - 1;
+                break;
+            }
+            sp -= 1;
+            done = p;
+        }
     }
 }
 
@@ -102,4 +152,8 @@ pub fn trace_recorded(tree: &KdTree, ray: &Ray, h: &mut History, stats: &mut Tra
     steps.flush(stats);
     stats.prim_tests += v.tests;
     h.hit = v.best;
+    if !h.overflow {
+        let n = h.len;
+        fill_lengths(&mut h.records[..n]);
+    }
 }

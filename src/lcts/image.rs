@@ -9,6 +9,7 @@
 //! the window's common leaf sequence, then by ropes.
 
 use super::history::{trace_recorded, History, HistoryRecord};
+use super::hlcts::{self, Boundary, HlctsEntry, Source, MAX_RAYS};
 use super::slcts;
 use crate::geom::{Camera, Hit, INVALID_ID};
 use crate::kd::{KdTree, Traversal};
@@ -33,17 +34,30 @@ pub enum Scheme {
         /// Window height in pixels, at least 2.
         m: u32,
     },
+    /// Each scanline by bisection: the HLCTS of an interval's two end rays
+    /// starts the traversal of its middle ray, which then splits it.
+    Hlcts1d,
+    /// The image by bisection in two dimensions, alternating axes: the
+    /// HLCTS of a rectangle's four corner rays starts the rays that split it.
+    Hlcts2d,
 }
 
-/// Buffer sizes for [`cast_image`].
+/// Buffer sizes for [`cast_image`]: SLCTS schemes keep the corner rays
+/// of two rows of windows; HLCTS schemes keep, per level of bisection, two
+/// rays' histories and one HLCTS (`4 * history_capacity` entries, enough for
+/// any cut of four histories).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct ImageRequirements {
-    /// [`HistoryRecord`] slots: `2 * corner columns * history_capacity`.
+    /// [`HistoryRecord`] slots: histories of `history_capacity` records each.
     pub records: usize,
-    /// Sequence entries (`u32`): `history_capacity`.
+    /// Sequence entries (`u32`) of one SLCTS.
     pub entries: usize,
-    /// [`CornerInfo`] slots: two rows of corner columns.
+    /// [`CornerInfo`] slots, one per kept history.
     pub corners: usize,
+    /// Entry starts (`u32`) of histories traced through an HLCTS.
+    pub starts: usize,
+    /// [`HlctsEntry`] slots.
+    pub hlcts: usize,
 }
 
 /// Caller memory for [`cast_image`].
@@ -52,8 +66,12 @@ pub struct ImageScratch<'b> {
     pub records: &'b mut [HistoryRecord],
     /// One window's common sequence.
     pub entries: &'b mut [u32],
-    /// Corner ray infos, two rows.
+    /// Corner ray infos.
     pub corners: &'b mut [CornerInfo],
+    /// HLCTS schemes: where each entry's records begin in a history.
+    pub starts: &'b mut [u32],
+    /// HLCTS schemes: one cut per level of bisection.
+    pub hlcts: &'b mut [HlctsEntry],
 }
 
 /// What a cast did, beyond the per-ray counters.
@@ -98,9 +116,21 @@ fn corner_count(len: u32, n: u32) -> usize {
 /// `history_capacity` records (a ray whose traversal is longer shares nothing).
 pub fn image_requirements(
     width: u32,
+    height: u32,
     scheme: Scheme,
     history_capacity: usize,
 ) -> ImageRequirements {
+    if let Some(levels) = bisection_levels(width, height, scheme) {
+        let slots = 4 + 2 * levels;
+        let per_cut = MAX_RAYS * history_capacity;
+        return ImageRequirements {
+            records: slots * history_capacity,
+            entries: 0,
+            corners: 0,
+            starts: slots * per_cut,
+            hlcts: (levels + 1) * per_cut,
+        };
+    }
     let cols = match scheme {
         Scheme::Slcts1d { n } | Scheme::Slcts2d { n, .. } => corner_count(width.max(1), n.max(2)),
         _ => 0,
@@ -114,6 +144,18 @@ pub fn image_requirements(
         records: rows * cols * history_capacity,
         entries: if cols == 0 { 0 } else { history_capacity },
         corners: rows * cols,
+        starts: 0,
+        hlcts: 0,
+    }
+}
+
+/// Levels of bisection of an HLCTS scheme (None for the others).
+fn bisection_levels(width: u32, height: u32, scheme: Scheme) -> Option<usize> {
+    let log = |n: u32| (32 - n.max(1).leading_zeros()) as usize;
+    match scheme {
+        Scheme::Hlcts1d => Some(log(width) + 1),
+        Scheme::Hlcts2d => Some(log(width) + log(height) + 1),
+        _ => None,
     }
 }
 
@@ -183,6 +225,9 @@ pub fn cast_image(
                     put(x, y, &hit);
                 }
             }
+        }
+        Scheme::Hlcts1d | Scheme::Hlcts2d => {
+            return cast_bisection(tree, camera, scheme, scratch, t_out, prim_out);
         }
         Scheme::Slcts1d { n } | Scheme::Slcts2d { n, .. } => {
             if n < 2 {
@@ -341,4 +386,345 @@ fn slice_of<'a>(
 ) -> Option<&'a [HistoryRecord]> {
     let c = row.info[i];
     (c.overflow == 0).then(|| &buf[i * cap..i * cap + c.len as usize])
+}
+
+/// A ray whose history bounds a shaft of the bisection.
+#[derive(Clone, Copy)]
+struct Corner<'a> {
+    ray: crate::Ray,
+    records: Option<&'a [HistoryRecord]>,
+    /// Its record per entry of the current rectangle's parent cut.
+    source: Source<'a>,
+    hit: Hit,
+}
+
+/// Buffers still free at a level of the bisection.
+struct Free<'b> {
+    records: &'b mut [HistoryRecord],
+    starts: &'b mut [u32],
+    hlcts: &'b mut [HlctsEntry],
+}
+
+struct Bisection<'t, 'o, F: FnMut(u32, u32, &Hit)> {
+    tree: &'t KdTree<'t>,
+    camera: &'t Camera,
+    basis: (crate::Vec3, crate::Vec3, crate::Vec3),
+    cap: usize,
+    per_cut: usize,
+    put: &'o mut F,
+    st: CastStats,
+}
+
+impl<F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, F> {
+    fn ray(&self, x: u32, y: u32) -> crate::Ray {
+        let (f, r, u) = self.basis;
+        self.camera.ray_in(f, r, u, x as f32 + 0.5, y as f32 + 0.5)
+    }
+
+    /// Traces the ray of pixel (x, y) through `cut` into the slot at the
+    /// front of `free`, returning it as a corner of the children and what is left free.
+    fn split_ray<'a, 'b>(
+        &mut self,
+        x: u32,
+        y: u32,
+        cut: &hlcts::Hlcts,
+        free: Free<'b>,
+    ) -> (Corner<'b>, Free<'b>)
+    where
+        'b: 'a,
+    {
+        let (rec, records) = free.records.split_at_mut(self.cap);
+        let (starts, rest_starts) = free.starts.split_at_mut(self.per_cut);
+        let mut h = History::new(rec);
+        let hit = hlcts::trace(
+            self.tree,
+            cut,
+            &self.ray(x, y),
+            Some((&mut h, &mut starts[..cut.len.max(1)])),
+            &mut self.st.trace,
+        );
+        (self.put)(x, y, &hit);
+        let (len, overflow) = (h.len, h.overflow);
+        let rec: &'b [HistoryRecord] = rec;
+        let starts: &'b [u32] = starts;
+        let corner = Corner {
+            ray: self.ray(x, y),
+            records: (!overflow).then(|| &rec[..len]),
+            source: Source::Starts(starts),
+            hit,
+        };
+        (
+            corner,
+            Free {
+                records,
+                starts: rest_starts,
+                hlcts: free.hlcts,
+            },
+        )
+    }
+
+    /// The shaft of the rectangle (or interval) with `corners`, under `parent`.
+    fn shaft(
+        &mut self,
+        rect: [u32; 4],
+        corners: &[Corner],
+        parent: &[HlctsEntry],
+        depth: u32,
+        free: Free,
+    ) {
+        let [x0, y0, x1, y1] = rect;
+        let bounds: [Boundary; MAX_RAYS] = core::array::from_fn(|j| {
+            let c = corners.get(j).copied().unwrap_or(corners[0]);
+            Boundary {
+                ray: c.ray,
+                records: c.records,
+                source: c.source,
+                hit: c.hit,
+            }
+        });
+        let (cut_buf, hlcts_rest) = free.hlcts.split_at_mut(self.per_cut);
+        let cut = hlcts::build(self.tree, parent, &bounds[..corners.len()], cut_buf);
+        self.st.windows += 1;
+        self.st.windows_shared += (cut.leading_leaves > 0) as u64;
+        self.st.windows_terminated += cut.termination.is_some() as u64;
+        let free = Free {
+            records: free.records,
+            starts: free.starts,
+            hlcts: hlcts_rest,
+        };
+        // Children name the rectangle's corners by their slot in this cut.
+        let old = |j: usize| Corner {
+            source: Source::Parent(j),
+            ..corners[j]
+        };
+        let can_x = x1 - x0 >= 2;
+        let can_y = y1 - y0 >= 2;
+        if corners.len() == 2 {
+            if !can_x {
+                return;
+            }
+            let xm = (x0 + x1) / 2;
+            let (m, free) = self.split_ray(xm, y0, &cut, free);
+            let entries = cut.as_slice();
+            let Free {
+                records,
+                starts,
+                hlcts,
+            } = free;
+            self.shaft(
+                [x0, y0, xm, y0],
+                &[old(0), m],
+                entries,
+                depth + 1,
+                Free {
+                    records,
+                    starts,
+                    hlcts: &mut *hlcts,
+                },
+            );
+            self.shaft(
+                [xm, y0, x1, y0],
+                &[m, old(1)],
+                entries,
+                depth + 1,
+                Free {
+                    records,
+                    starts,
+                    hlcts,
+                },
+            );
+            return;
+        }
+        if !can_x && !can_y {
+            return;
+        }
+        // Corners: 0 (x0, y0), 1 (x1, y0), 2 (x0, y1), 3 (x1, y1).
+        let split_x = can_x && (!can_y || depth % 2 == 0);
+        if split_x {
+            let xm = (x0 + x1) / 2;
+            let (a, free) = self.split_ray(xm, y0, &cut, free);
+            let (b, free) = self.split_ray(xm, y1, &cut, free);
+            let entries = cut.as_slice();
+            let Free {
+                records,
+                starts,
+                hlcts,
+            } = free;
+            self.shaft(
+                [x0, y0, xm, y1],
+                &[old(0), a, old(2), b],
+                entries,
+                depth + 1,
+                Free {
+                    records,
+                    starts,
+                    hlcts: &mut *hlcts,
+                },
+            );
+            self.shaft(
+                [xm, y0, x1, y1],
+                &[a, old(1), b, old(3)],
+                entries,
+                depth + 1,
+                Free {
+                    records,
+                    starts,
+                    hlcts,
+                },
+            );
+        } else {
+            let ym = (y0 + y1) / 2;
+            let (a, free) = self.split_ray(x0, ym, &cut, free);
+            let (b, free) = self.split_ray(x1, ym, &cut, free);
+            let entries = cut.as_slice();
+            let Free {
+                records,
+                starts,
+                hlcts,
+            } = free;
+            self.shaft(
+                [x0, y0, x1, ym],
+                &[old(0), old(1), a, b],
+                entries,
+                depth + 1,
+                Free {
+                    records,
+                    starts,
+                    hlcts: &mut *hlcts,
+                },
+            );
+            self.shaft(
+                [x0, ym, x1, y1],
+                &[a, b, old(2), old(3)],
+                entries,
+                depth + 1,
+                Free {
+                    records,
+                    starts,
+                    hlcts,
+                },
+            );
+        }
+    }
+}
+
+fn cast_bisection(
+    tree: &KdTree,
+    camera: &Camera,
+    scheme: Scheme,
+    scratch: ImageScratch,
+    t_out: &mut [f32],
+    prim_out: &mut [u32],
+) -> Result<CastStats, Error> {
+    let (w, h) = (camera.width, camera.height);
+    let levels = bisection_levels(w, h, scheme).unwrap_or(1);
+    let slots = 4 + 2 * levels;
+    let cap = scratch.records.len() / slots;
+    if cap == 0 {
+        return Err(Error::SliceTooSmall {
+            slice: "records",
+            needed: slots,
+            got: scratch.records.len(),
+        });
+    }
+    let per_cut = MAX_RAYS * cap;
+    if scratch.starts.len() < slots * per_cut {
+        return Err(Error::SliceTooSmall {
+            slice: "starts",
+            needed: slots * per_cut,
+            got: scratch.starts.len(),
+        });
+    }
+    if scratch.hlcts.len() < (levels + 1) * per_cut {
+        let needed = (levels + 1) * per_cut;
+        return Err(Error::SliceTooSmall {
+            slice: "hlcts",
+            needed,
+            got: scratch.hlcts.len(),
+        });
+    }
+    let mut put = |x: u32, y: u32, hit: &Hit| {
+        let i = y as usize * w as usize + x as usize;
+        t_out[i] = hit.t;
+        prim_out[i] = global_prim(tree, hit);
+    };
+    let mut b = Bisection {
+        tree,
+        camera,
+        basis: camera.basis(),
+        cap,
+        per_cut,
+        put: &mut put,
+        st: CastStats::default(),
+    };
+    let root = [hlcts::root_entry(tree)];
+    let rows: &mut dyn Iterator<Item = u32> =
+        &mut (0..if scheme == Scheme::Hlcts1d { h } else { 1 });
+    let (mut records, mut starts, mut cuts) = (scratch.records, scratch.starts, scratch.hlcts);
+    for y in rows {
+        let ys: &[u32] = if scheme == Scheme::Hlcts1d {
+            &[y, y]
+        } else {
+            &[0, h - 1]
+        };
+        let pts = [(0, ys[0]), (w - 1, ys[0]), (0, ys[1]), (w - 1, ys[1])];
+        let k = if scheme == Scheme::Hlcts1d {
+            if w == 1 {
+                1
+            } else {
+                2
+            }
+        } else {
+            4
+        };
+        // The shaft's first corner rays, traced from the root.
+        let (corner_recs, rest) = records.split_at_mut(4 * cap);
+        let mut infos = [(0usize, false, Hit::MISS); 4];
+        for (j, c) in corner_recs.chunks_mut(cap).enumerate().take(k) {
+            let (x, yy) = pts[j];
+            let mut hist = History::new(c);
+            trace_recorded(tree, &b.ray(x, yy), &mut hist, &mut b.st.trace);
+            (b.put)(x, yy, &hist.hit);
+            infos[j] = (hist.len, hist.overflow, hist.hit);
+        }
+        {
+            let corner_recs: &[HistoryRecord] = corner_recs;
+            let corners: [Corner; 4] = core::array::from_fn(|j| {
+                let (len, overflow, hit) = infos[j];
+                let recs = &corner_recs[j * cap..j * cap + len];
+                Corner {
+                    ray: b.ray(pts[j].0, pts[j].1),
+                    records: (!overflow).then_some(recs),
+                    source: Source::Parent(j),
+                    hit,
+                }
+            });
+            let rect = if scheme == Scheme::Hlcts1d {
+                [0, y, w - 1, y]
+            } else {
+                [0, 0, w - 1, h - 1]
+            };
+            let free = Free {
+                records: &mut *rest,
+                starts: &mut *starts,
+                hlcts: &mut *cuts,
+            };
+            if k > 1 {
+                b.shaft(rect, &corners[..k], &root, 0, free);
+            }
+        }
+        records = {
+            let r: &mut [HistoryRecord] = records;
+            r
+        };
+        starts = {
+            let s: &mut [u32] = starts;
+            s
+        };
+        cuts = {
+            let c: &mut [HlctsEntry] = cuts;
+            c
+        };
+    }
+    Ok(b.st)
 }

@@ -14,6 +14,7 @@
 //! traversal, so buffer sizes change speed, never results.
 
 pub mod history;
+pub mod hlcts;
 pub mod image;
 pub mod slcts;
 

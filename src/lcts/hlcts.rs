@@ -1,0 +1,408 @@
+//! The hierarchical LCTS: the cut of the kd-tree where the boundary rays of
+//! a shaft stop deciding alike. Above the cut every ray of the shaft would
+//! make the same decisions, so it starts at the cut's nodes, in order, and
+//! traverses each subtree hierarchically.
+//!
+//! Each entry keeps, per boundary ray, where that node's subtree lies in the
+//! ray's history, so a sub-shaft's HLCTS is built from its parent's entries
+//! without retracing from the root (section 4.2.3).
+
+use super::history::{fill_lengths, History, HistoryRecord, KIND_LEAF};
+use crate::geom::Aabb;
+use crate::kd::traverse::{Closest, NoRecord, Steps};
+use crate::kd::{KdNode, KdTree};
+use crate::{Hit, Ray, TraceStats, Vec3};
+
+/// "No record": the ray never reached this node (it ended before it).
+pub const NONE: u32 = u32::MAX;
+/// Most boundary rays a shaft may have (corners of a rectangle).
+pub const MAX_RAYS: usize = 4;
+
+/// Flag of an entry standing for a run of empty leaves (section 4.3.1).
+pub const ENTRY_EMPTY_RUN: u32 = 1;
+
+/// One node of the cut, its box, and per boundary ray the index of its
+/// record in that ray's history (or [`NONE`]). Plain data.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C)]
+pub struct HlctsEntry {
+    /// Node index.
+    pub node: u32,
+    /// [`ENTRY_EMPTY_RUN`].
+    pub flags: u32,
+    /// Lower corner of the node's box.
+    pub min: [f32; 3],
+    /// Upper corner of the node's box.
+    pub max: [f32; 3],
+    /// Record index per boundary ray.
+    pub ptr: [u32; MAX_RAYS],
+}
+
+/// An HLCTS in a caller buffer.
+#[derive(Debug)]
+pub struct Hlcts<'b> {
+    /// Entries, in the order every ray of the shaft meets them.
+    pub entries: &'b mut [HlctsEntry],
+    /// Entries used.
+    pub len: usize,
+    /// Leading entries that are leaves (section 4.3.3).
+    pub leading_leaves: usize,
+    /// Termination object (section 4.3.2), a global primitive index.
+    pub termination: Option<u32>,
+}
+
+impl Hlcts<'_> {
+    /// The used entries.
+    pub fn as_slice(&self) -> &[HlctsEntry] {
+        &self.entries[..self.len]
+    }
+}
+
+/// The entry that starts every traversal: the root, whose record is the
+/// first of every history traced from the root.
+pub fn root_entry(tree: &KdTree) -> HlctsEntry {
+    let b = tree.info.bounds();
+    HlctsEntry {
+        node: 0,
+        flags: 0,
+        min: b.min.into(),
+        max: b.max.into(),
+        ptr: [0; MAX_RAYS],
+    }
+}
+
+/// Where a boundary ray's record for a parent entry is found.
+#[derive(Clone, Copy)]
+pub enum Source<'a> {
+    /// A boundary ray of the parent shaft: slot `j` of each parent entry's `ptr`.
+    Parent(usize),
+    /// A ray traced through the parent HLCTS: its record index per parent entry.
+    Starts(&'a [u32]),
+}
+
+/// One boundary ray of a shaft: the ray, its history, where its records
+/// are, its hit.
+#[derive(Clone, Copy)]
+pub struct Boundary<'a> {
+    /// The ray.
+    pub ray: Ray,
+    /// The history (`None` when it overflowed: the ray then shares nothing).
+    pub records: Option<&'a [HistoryRecord]>,
+    /// How its record for each parent entry is found.
+    pub source: Source<'a>,
+    /// Its hit.
+    pub hit: Hit,
+}
+
+struct Builder<'t, 'b, 'r> {
+    tree: &'t KdTree<'t>,
+    rays: &'r [Boundary<'r>],
+    out: Hlcts<'b>,
+    last_empty: bool,
+    /// An entry did not fit: the cut is incomplete and must not be used.
+    full: bool,
+}
+
+/// Builds the HLCTS of a shaft whose boundary rays are `rays` (at most
+/// [`MAX_RAYS`]) under the parent cut `parent` (for the first shaft,
+/// `[root_entry(tree)]` with every ray sourced as `Parent(j)`). When the
+/// refined cut does not fit `entries`, the parent's cut is kept unrefined
+/// (it is valid for every sub-shaft), so an entry buffer at least as long as
+/// the parent cut always gives a usable cut.
+pub fn build<'b>(
+    tree: &KdTree,
+    parent: &[HlctsEntry],
+    rays: &[Boundary],
+    entries: &'b mut [HlctsEntry],
+) -> Hlcts<'b> {
+    let mut b = Builder {
+        tree,
+        rays: &rays[..rays.len().min(MAX_RAYS)],
+        out: Hlcts {
+            entries,
+            len: 0,
+            leading_leaves: 0,
+            termination: None,
+        },
+        last_empty: false,
+        full: false,
+    };
+    for refine in [true, false] {
+        b.out.len = 0;
+        b.last_empty = false;
+        b.full = false;
+        for (e, pe) in parent.iter().enumerate() {
+            let mut pos = [NONE; MAX_RAYS];
+            for (j, r) in b.rays.iter().enumerate() {
+                pos[j] = match (r.records, r.source) {
+                    (None, _) => NONE,
+                    (Some(_), Source::Parent(slot)) => pe.ptr[slot],
+                    (Some(_), Source::Starts(s)) => s.get(e).copied().unwrap_or(NONE),
+                };
+            }
+            let bx = Aabb {
+                min: Vec3::from(pe.min),
+                max: Vec3::from(pe.max),
+            };
+            if pe.flags & ENTRY_EMPTY_RUN != 0 || !refine {
+                b.push(pe.node, pe.flags, &bx, pos);
+            } else {
+                b.walk(pe.node, bx, pos, 0);
+            }
+        }
+        if !b.full {
+            break;
+        }
+    }
+    if b.full {
+        // Not even the parent's cut fits: share nothing below the root.
+        b.out.len = 0;
+        b.full = false;
+        b.push(0, 0, &tree.info.bounds(), [NONE; MAX_RAYS]);
+    }
+    let n = b.out.len;
+    b.out.leading_leaves = b.out.entries[..n]
+        .iter()
+        .take_while(|e| tree.nodes[e.node as usize].is_leaf())
+        .count();
+    b.out.termination = termination_object(tree, &b.out, rays);
+    b.out
+}
+
+impl Builder<'_, '_, '_> {
+    fn kind(&self, j: usize, pos: u32) -> u32 {
+        match self.rays[j].records {
+            Some(r) if (pos as usize) < r.len() => r[pos as usize].kind(),
+            _ => 6, // missing: differs from everything recorded
+        }
+    }
+
+    fn walk(&mut self, node: u32, bx: Aabb, pos: [u32; MAX_RAYS], depth: u32) {
+        let k = self.rays.len();
+        let kind = self.kind(0, pos[0]);
+        // Equal decisions carry over to the rays between only when the
+        // boundary rays also enter and leave the node through the same
+        // faces: then every ray of the shaft enters (and leaves) within the
+        // convex hull of their entry (exit) points on that face, on the same
+        // side of the split. (Equal decisions alone do not suffice: two rays
+        // leaving through opposite faces before the split can straddle one
+        // that crosses it.)
+        let faces = faces(&self.rays[0].ray, &bx);
+        let alike = kind < 4
+            && depth <= crate::kd::KD_MAX_DEPTH
+            && (1..k).all(|j| {
+                self.kind(j, pos[j]) == kind
+                    && crate::lcts::hlcts::faces(&self.rays[j].ray, &bx) == faces
+            });
+        if !alike {
+            self.emit(node, &bx, pos);
+            return;
+        }
+        let nd: KdNode = self.tree.nodes[node as usize];
+        let (a, s, left) = (nd.axis(), nd.split(), nd.index());
+        let mut lb = bx;
+        lb.max[a] = s;
+        let mut rb = bx;
+        rb.min[a] = s;
+        let mut first = [NONE; MAX_RAYS];
+        let mut second = [NONE; MAX_RAYS];
+        for j in 0..k {
+            let r = self.rays[j].records.unwrap_or(&[]);
+            let p1 = pos[j] as usize + 1;
+            first[j] = p1 as u32;
+            second[j] = r
+                .get(p1)
+                .map_or(NONE, |rec| (p1 + rec.subtree_len()) as u32);
+        }
+        match kind {
+            0 => self.walk(left, lb, first, depth + 1),
+            1 => self.walk(left + 1, rb, first, depth + 1),
+            2 => {
+                self.walk(left, lb, first, depth + 1);
+                self.walk(left + 1, rb, second, depth + 1);
+            }
+            _ => {
+                self.walk(left + 1, rb, first, depth + 1);
+                self.walk(left, lb, second, depth + 1);
+            }
+        }
+    }
+
+    fn emit(&mut self, node: u32, bx: &Aabb, pos: [u32; MAX_RAYS]) {
+        let nd = self.tree.nodes[node as usize];
+        let empty = nd.is_leaf() && self.tree.leaf_refs(nd).is_empty();
+        if empty && self.last_empty {
+            return; // unified into the run already in the sequence
+        }
+        self.last_empty = empty;
+        self.push(node, if empty { ENTRY_EMPTY_RUN } else { 0 }, bx, pos);
+    }
+
+    fn push(&mut self, node: u32, flags: u32, bx: &Aabb, pos: [u32; MAX_RAYS]) {
+        if self.out.len == self.out.entries.len() {
+            self.full = true;
+            return;
+        }
+        self.out.entries[self.out.len] = HlctsEntry {
+            node,
+            flags,
+            min: bx.min.into(),
+            max: bx.max.into(),
+            ptr: pos,
+        };
+        self.out.len += 1;
+    }
+}
+
+/// The faces (0 to 5: -x, +x, -y, +y, -z, +z) through which `ray` enters
+/// and leaves `bx`; 6 where its segment starts or ends inside, 7 when it misses.
+pub(crate) fn faces(ray: &Ray, bx: &Aabb) -> (u8, u8) {
+    let mut t0 = ray.t_min;
+    let mut t1 = ray.t_max;
+    let (mut f0, mut f1) = (6u8, 6u8);
+    for a in 0..3 {
+        let d = ray.dir[a];
+        if d == 0.0 {
+            if ray.origin[a] < bx.min[a] || ray.origin[a] > bx.max[a] {
+                return (7, 7);
+            }
+            continue;
+        }
+        let inv = 1.0 / d;
+        let (lo, hi) = (
+            (bx.min[a] - ray.origin[a]) * inv,
+            (bx.max[a] - ray.origin[a]) * inv,
+        );
+        let (near, far, fn_, ff) = if d > 0.0 {
+            (lo, hi, 2 * a, 2 * a + 1)
+        } else {
+            (hi, lo, 2 * a + 1, 2 * a)
+        };
+        if near > t0 {
+            t0 = near;
+            f0 = fn_ as u8;
+        }
+        if far < t1 {
+            t1 = far;
+            f1 = ff as u8;
+        }
+    }
+    if t0 > t1 {
+        (7, 7)
+    } else {
+        (f0, f1)
+    }
+}
+
+/// Section 4.3.2 over the cut: every boundary ray hits the same convex
+/// primitive and ends in the first non-empty entry, a leaf holding only it.
+fn termination_object(tree: &KdTree, h: &Hlcts, rays: &[Boundary]) -> Option<u32> {
+    let first = rays.first()?.hit;
+    if !first.is_hit()
+        || rays
+            .iter()
+            .any(|r| (r.hit.geom_id, r.hit.prim_id) != (first.geom_id, first.prim_id))
+    {
+        return None;
+    }
+    let global = match first.geom_id {
+        crate::geom::GEOM_TRIANGLES => first.prim_id,
+        crate::geom::GEOM_SPHERES => tree.scene.triangles.len() as u32 + first.prim_id,
+        _ => return None,
+    };
+    let c = match h.as_slice() {
+        [c, ..] if c.flags & ENTRY_EMPTY_RUN == 0 => c.node,
+        [e, c, ..] if e.flags & ENTRY_EMPTY_RUN != 0 && c.flags & ENTRY_EMPTY_RUN == 0 => c.node,
+        _ => return None,
+    };
+    let nd = tree.nodes[c as usize];
+    if !nd.is_leaf() || tree.leaf_refs(nd) != [global] {
+        return None;
+    }
+    let ends_in_c = |r: &Boundary| {
+        r.records
+            .and_then(|recs| recs.iter().rev().find(|x| x.kind() == KIND_LEAF))
+            .map(|x| x.node)
+            == Some(c)
+    };
+    rays.iter().all(ends_in_c).then_some(global)
+}
+
+/// Traces `ray` (inside the shaft of `h`) from the cut: the termination
+/// object if any, else each entry's subtree in order. With `record`, also
+/// writes the ray's history (records of each entry's subtree, in order)
+/// and `starts[e]`, where entry `e`'s records begin ([`NONE`] where the ray
+/// ended before it). The hit is exactly the hierarchical traversal's.
+pub fn trace(
+    tree: &KdTree,
+    h: &Hlcts,
+    ray: &Ray,
+    mut record: Option<(&mut History, &mut [u32])>,
+    stats: &mut TraceStats,
+) -> Hit {
+    stats.rays += 1;
+    if let Some((hist, starts)) = record.as_mut() {
+        hist.len = 0;
+        hist.overflow = false;
+        hist.hit = Hit::MISS;
+        for s in starts.iter_mut() {
+            *s = NONE;
+        }
+    }
+    if !ray.is_valid() {
+        return Hit::MISS;
+    }
+    let mut v = Closest::new(ray);
+    let mut steps = Steps::default();
+    let r = v.ray;
+    let mut hit_via_termination = false;
+    if let (Some(o), None) = (h.termination, record.as_ref()) {
+        v.tests += 1;
+        if let Some(hit) = tree.scene.intersect_prim(o as usize, &r, ray.t_max) {
+            v.best = hit;
+            steps.leaves += h.as_slice().iter().take(2).count() as u64;
+            hit_via_termination = true;
+        }
+    }
+    if !hit_via_termination {
+        for (e, entry) in h.as_slice().iter().enumerate() {
+            if entry.flags & ENTRY_EMPTY_RUN != 0 {
+                // Nothing to test; one step for the whole run.
+                steps.leaves += 1;
+                steps.empty += 1;
+                if let Some((hist, starts)) = record.as_mut() {
+                    starts[e] = hist.len as u32;
+                    crate::kd::traverse::Recorder::leaf(&mut **hist, entry.node);
+                }
+                continue;
+            }
+            let bx = Aabb {
+                min: Vec3::from(entry.min),
+                max: Vec3::from(entry.max),
+            };
+            let Some((t0, t1)) = bx.clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max) else {
+                continue;
+            };
+            let stopped = match record.as_mut() {
+                Some((hist, starts)) => {
+                    starts[e] = hist.len as u32;
+                    tree.walk_from(&mut v, &mut **hist, entry.node, t0, t1, &mut steps)
+                }
+                None => tree.walk_from(&mut v, &mut NoRecord, entry.node, t0, t1, &mut steps),
+            };
+            if stopped {
+                break;
+            }
+        }
+    }
+    if let Some((hist, _)) = record.as_mut() {
+        hist.hit = v.best;
+        if !hist.overflow {
+            let n = hist.len;
+            fill_lengths(&mut hist.records[..n]);
+        }
+    }
+    steps.flush(stats);
+    stats.prim_tests += v.tests;
+    v.best
+}
