@@ -161,10 +161,23 @@ pub(crate) enum RopeEnd {
 /// An exit point of TA_B^rec: the node to visit after the current segment,
 /// the signed distance and the point where the segment ends.
 #[derive(Clone, Copy)]
-struct ExitPoint {
+pub(crate) struct ExitPoint {
     node: u32,
     t: f32,
     p: Vec3,
+}
+
+/// The traversal stack: exit points for the deepest tree any build makes.
+/// Callers that walk many subtrees for one ray (HLCTS) make it once.
+pub(crate) type TraversalStack = [ExitPoint; STACK_SIZE];
+
+/// A stack ready for [`KdTree::walk_from`].
+pub(crate) fn new_stack() -> TraversalStack {
+    [ExitPoint {
+        node: NO_NODE,
+        t: 0.0,
+        p: Vec3::ZERO,
+    }; STACK_SIZE]
 }
 
 /// Marks an exit point pushed only to end a segment that is then
@@ -256,28 +269,26 @@ impl<'a> KdTree<'a> {
             .bounds()
             .clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max)
         {
-            Some((t0, t1)) => self.walk_from(v, rec, 0, t0, t1, steps),
+            Some((t0, t1)) => self.walk_from(v, rec, &mut new_stack(), 0, t0, t1, steps),
             None => false,
         }
     }
 
     /// TA_B^rec over the subtree of `start`, for the ray's segment
-    /// `[t0, t1]` inside that node's box. True when the visitor stopped it.
+    /// `[t0, t1]` inside that node's box, on the caller's `stack`. True when
+    /// the visitor stopped it.
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn walk_from<V: LeafVisitor, R: Recorder>(
         &self,
         v: &mut V,
         rec: &mut R,
+        stack: &mut TraversalStack,
         start: u32,
         t0: f32,
         t1: f32,
         steps: &mut Steps,
     ) -> bool {
         let r = *v.ray();
-        let mut stack = [ExitPoint {
-            node: NO_NODE,
-            t: 0.0,
-            p: Vec3::ZERO,
-        }; STACK_SIZE];
         stack[0] = ExitPoint {
             node: NO_NODE,
             t: t1,

@@ -9,14 +9,14 @@
 
 use super::history::{fill_lengths, History, HistoryRecord, KIND_LEAF};
 use crate::geom::Aabb;
-use crate::kd::traverse::{Closest, NoRecord, Steps};
+use crate::kd::traverse::{new_stack, Closest, NoRecord, Steps};
 use crate::kd::{KdNode, KdTree};
 use crate::{Hit, Ray, TraceStats, Vec3};
 
 /// "No record": the ray never reached this node (it ended before it).
 pub const NONE: u32 = u32::MAX;
-/// Most boundary rays a shaft may have (corners of a rectangle).
-pub const MAX_RAYS: usize = 4;
+/// Most boundary rays a shaft may have: the 4 x 4 vertex pairs of two quads.
+pub const MAX_RAYS: usize = 16;
 
 /// Flag of an entry standing for a run of empty leaves (section 4.3.1).
 pub const ENTRY_EMPTY_RUN: u32 = 1;
@@ -187,13 +187,13 @@ impl Builder<'_, '_, '_> {
         // side of the split. (Equal decisions alone do not suffice: two rays
         // leaving through opposite faces before the split can straddle one
         // that crosses it.)
-        let faces = faces(&self.rays[0].ray, &bx);
         let alike = kind < 4
             && depth <= crate::kd::KD_MAX_DEPTH
-            && (1..k).all(|j| {
-                self.kind(j, pos[j]) == kind
-                    && crate::lcts::hlcts::faces(&self.rays[j].ray, &bx) == faces
-            });
+            && (1..k).all(|j| self.kind(j, pos[j]) == kind)
+            && {
+                let f = faces(&self.rays[0].ray, &bx);
+                (1..k).all(|j| faces(&self.rays[j].ray, &bx) == f)
+            };
         if !alike {
             self.emit(node, &bx, pos);
             return;
@@ -365,6 +365,7 @@ pub fn trace(
         }
     }
     if !hit_via_termination {
+        let mut stack = new_stack();
         for (e, entry) in h.as_slice().iter().enumerate() {
             if entry.flags & ENTRY_EMPTY_RUN != 0 {
                 // Nothing to test; one step for the whole run.
@@ -386,9 +387,25 @@ pub fn trace(
             let stopped = match record.as_mut() {
                 Some((hist, starts)) => {
                     starts[e] = hist.len as u32;
-                    tree.walk_from(&mut v, &mut **hist, entry.node, t0, t1, &mut steps)
+                    tree.walk_from(
+                        &mut v,
+                        &mut **hist,
+                        &mut stack,
+                        entry.node,
+                        t0,
+                        t1,
+                        &mut steps,
+                    )
                 }
-                None => tree.walk_from(&mut v, &mut NoRecord, entry.node, t0, t1, &mut steps),
+                None => tree.walk_from(
+                    &mut v,
+                    &mut NoRecord,
+                    &mut stack,
+                    entry.node,
+                    t0,
+                    t1,
+                    &mut steps,
+                ),
             };
             if stopped {
                 break;

@@ -16,6 +16,7 @@
 pub mod history;
 pub mod hlcts;
 pub mod image;
+pub mod patch;
 pub mod slcts;
 
 pub use history::{History, HistoryRecord};
