@@ -86,7 +86,7 @@ pub fn patch_visibility(
             return Err(Error::InvalidParameter { name: "patch" });
         }
     }
-    if !(eps >= 0.0 && eps < 0.5) {
+    if !(0.0..0.5).contains(&eps) {
         return Err(Error::InvalidParameter { name: "eps" });
     }
     let k = a.len() * b.len();
