@@ -86,6 +86,39 @@ int main(void) {
             CHECK_STATUS(coray_kdtree_occluded(arena, req.tree_bytes, &ts.view, trav, rays, occ, nr, &st), CORAY_STATUS_OK);
             CHECK_STATUS(coray_kdtree_intersect1(arena, req.tree_bytes, &ts.view, trav, rays, hits, &st), CORAY_STATUS_OK);
         }
+        /* LCTS image casting and patch visibility, scratch allocated before counting. */
+        {
+            CorayCamera cam;
+            CorayCastParams cp = coray_cast_params_default();
+            size_t cb = 0, pb = coray_patch_requirements(256);
+            uint32_t sch;
+            float a[12] = {-0.5f, -0.5f, 1.5f, 0.5f, -0.5f, 1.5f, 0.5f, 0.5f, 1.5f, -0.5f, 0.5f, 1.5f};
+            float b[9] = {-0.3f, -0.3f, -1.5f, 0.3f, -0.3f, -1.5f, 0.0f, 0.3f, -1.5f};
+            CorayPatchResult pr;
+            void *cs, *ps;
+            memset(&cam, 0, sizeof cam);
+            cam.struct_size = sizeof cam;
+            cam.from[2] = 3.0f;
+            cam.up[1] = 1.0f;
+            cam.angle_deg = 45.0f;
+            cam.width = 64;
+            cam.height = 48;
+            counting = 0;
+            cp.scheme = CORAY_SCHEME_HLCTS_2D;
+            CHECK_STATUS(coray_cast_requirements(&cam, &cp, &cb), CORAY_STATUS_OK);
+            cs = arena_alloc(cb);
+            ps = arena_alloc(pb);
+            counting = 1;
+            for (sch = CORAY_SCHEME_SLCTS_1D; sch <= CORAY_SCHEME_HLCTS_2D; sch++) {
+                cp.scheme = sch;
+                CHECK_STATUS(coray_kdtree_cast_image(arena, req.tree_bytes, &ts.view, &cam, &cp, cs, cb, (float *)hits, (uint32_t *)rays, NULL), CORAY_STATUS_OK);
+            }
+            CHECK_STATUS(coray_kdtree_patch_visibility(arena, req.tree_bytes, &ts.view, a, 4, b, 3, 4, 1e-4f, ps, pb, &pr), CORAY_STATUS_OK);
+            counting = 0;
+            free(cs);
+            free(ps);
+            counting = 1;
+        }
         /* Error paths too. */
         CHECK_STATUS(coray_kdtree_intersect(arena, 10, &ts.view, 0, rays, hits, nr, &st), CORAY_STATUS_CORRUPT_ARENA);
         counting = 0;

@@ -10,6 +10,24 @@
 #include <stddef.h>
 #include <stdint.h>
 
+// Every pixel by hierarchical traversal (the reference).
+#define CORAY_SCHEME_HIERARCHICAL 0
+
+// Every pixel by rope traversal.
+#define CORAY_SCHEME_ROPES 1
+
+// SLCTS on each scanline, windows of `window_width x 1` pixels.
+#define CORAY_SCHEME_SLCTS_1D 2
+
+// SLCTS in windows of `window_width x window_height` pixels.
+#define CORAY_SCHEME_SLCTS_2D 3
+
+// HLCTS by bisection of each scanline.
+#define CORAY_SCHEME_HLCTS_1D 4
+
+// HLCTS by 2D bisection, alternating axes.
+#define CORAY_SCHEME_HLCTS_2D 5
+
 // Build with SAH-driven termination (depth bound from N). Default.
 #define CORAY_KD_PRESET_AUTO 0
 
@@ -209,6 +227,65 @@ typedef struct CorayTraceStats {
   uint64_t prim_tests;
 } CorayTraceStats;
 
+// How an image is cast. Get it from [`coray_cast_params_default`].
+typedef struct CorayCastParams {
+  // `sizeof(CorayCastParams)`.
+  size_t struct_size;
+  // `CORAY_SCHEME_*`.
+  uint32_t scheme;
+  // SLCTS window width (at least 2; the paper's 5).
+  uint32_t window_width;
+  // SLCTS-2D window height (at least 2; the paper's 5).
+  uint32_t window_height;
+  // Records kept per traversal history (at least 1): larger shares more,
+  // never changes results.
+  uint32_t history_capacity;
+} CorayCastParams;
+
+// A pinhole camera as NFF's `v` block gives it.
+typedef struct CorayCamera {
+  // `sizeof(CorayCamera)`.
+  size_t struct_size;
+  // Eye.
+  float from[3];
+  // Point looked at.
+  float at[3];
+  // Up vector.
+  float up[3];
+  // Field of view in degrees (NFF's angle).
+  float angle_deg;
+  // Image width in pixels (1 to 32768).
+  uint32_t width;
+  // Image height in pixels (1 to 32768).
+  uint32_t height;
+} CorayCamera;
+
+// What a cast did.
+typedef struct CorayCastStats {
+  // Work of all rays cast (boundary rays included).
+  struct CorayTraceStats trace;
+  // Shafts (windows, intervals, rectangles) given a common sequence.
+  uint64_t windows;
+  // Of those, shafts whose sequence starts with a shared leaf (gamma = this / windows).
+  uint64_t windows_shared;
+  // Shafts with a termination object.
+  uint64_t windows_terminated;
+} CorayCastStats;
+
+// Result of a patch-to-patch visibility query.
+typedef struct CorayPatchResult {
+  // Sample segments that meet nothing.
+  uint32_t visible;
+  // Sample segments cast (`samples_per_side^4`).
+  uint32_t samples;
+  // Entries of the HLCTS the segments started from.
+  uint32_t cut_len;
+  // Work of the vertex-to-vertex segments that built the HLCTS.
+  struct CorayTraceStats boundary;
+  // Work of the sample segments.
+  struct CorayTraceStats trace;
+} CorayPatchResult;
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
@@ -323,6 +400,67 @@ enum CorayStatus coray_kdtree_occluded1(const void *tree_arena,
                                         const struct CorayRay *ray,
                                         uint8_t *occluded,
                                         struct CorayTraceStats *stats);
+
+// Default cast parameters: SLCTS-2D, 5 x 5 windows, 256 records per history.
+struct CorayCastParams coray_cast_params_default(void);
+
+// Bytes of scratch `coray_kdtree_cast_image` needs for this camera and
+// these parameters (0 for the hierarchical and rope schemes).
+//
+// # Safety
+// Every pointer is NULL or valid for its type.
+enum CorayStatus coray_cast_requirements(const struct CorayCamera *cam,
+                                         const struct CorayCastParams *params,
+                                         size_t *scratch_bytes);
+
+// Casts one primary ray per pixel of `cam` through the tree with the
+// scheme of `params`. `t_out[y * width + x]` receives the hit distance
+// (infinity on a miss), `prim_out` the global primitive index (triangles,
+// then spheres, then cones; `CORAY_INVALID_ID` on a miss): every scheme
+// gives exactly what hierarchical traversal gives. `scratch` (16-byte
+// aligned, `coray_cast_requirements` bytes; may be NULL when that is 0) is
+// free again afterwards. `stats` may be NULL.
+//
+// # Safety
+// As `coray_kdtree_intersect`; `t_out` and `prim_out` hold `width * height`
+// elements; the scratch is used by nobody else during the call.
+enum CorayStatus coray_kdtree_cast_image(const void *tree_arena,
+                                         size_t tree_bytes,
+                                         const struct CorayScene *scene,
+                                         const struct CorayCamera *cam,
+                                         const struct CorayCastParams *params,
+                                         void *scratch,
+                                         size_t scratch_bytes,
+                                         float *t_out,
+                                         uint32_t *prim_out,
+                                         struct CorayCastStats *stats);
+
+// Scratch bytes of `coray_kdtree_patch_visibility` for histories of up to
+// `history_capacity` records.
+size_t coray_patch_requirements(uint32_t history_capacity);
+
+// Visibility between two convex patches (3 or 4 vertices each, `x y z`
+// per vertex): `samples_per_side x samples_per_side` points on each patch,
+// every segment between them trimmed by `eps` of its length at both ends,
+// all started from one HLCTS of the vertex-to-vertex segments. The visible
+// fraction is `visible / samples`; each segment's answer is exactly what
+// hierarchical traversal gives.
+//
+// # Safety
+// As `coray_kdtree_intersect`; `patch_a` and `patch_b` hold `3 * count`
+// floats; `scratch` holds `scratch_bytes` (16-byte aligned); `out` is writable.
+enum CorayStatus coray_kdtree_patch_visibility(const void *tree_arena,
+                                               size_t tree_bytes,
+                                               const struct CorayScene *scene,
+                                               const float *patch_a,
+                                               uint32_t count_a,
+                                               const float *patch_b,
+                                               uint32_t count_b,
+                                               uint32_t samples_per_side,
+                                               float eps,
+                                               void *scratch,
+                                               size_t scratch_bytes,
+                                               struct CorayPatchResult *out);
 
 // An empty scene with `struct_size` set.
 struct CorayScene coray_scene_default(void);

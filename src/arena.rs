@@ -202,3 +202,41 @@ impl KdArenaHeader {
         Ok(layout)
     }
 }
+
+/// Where the parts of an image-casting scratch arena lie:
+/// `[records | entries | corners | starts | hlcts]`, each 16-byte aligned.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ImageScratchLayout {
+    /// Element counts.
+    pub counts: crate::lcts::ImageRequirements,
+    /// Byte offsets of the five parts, in the order above.
+    pub offsets: [usize; 5],
+    /// Bytes the layout covers.
+    pub total_bytes: usize,
+}
+
+impl ImageScratchLayout {
+    /// The layout of `counts`.
+    pub fn of(counts: &crate::lcts::ImageRequirements) -> ImageScratchLayout {
+        use crate::lcts::hlcts::HlctsEntry;
+        use crate::lcts::{CornerInfo, HistoryRecord};
+        let sizes = [
+            counts.records * size_of::<HistoryRecord>(),
+            counts.entries * size_of::<u32>(),
+            counts.corners * size_of::<CornerInfo>(),
+            counts.starts * size_of::<u32>(),
+            counts.hlcts * size_of::<HlctsEntry>(),
+        ];
+        let mut offsets = [0usize; 5];
+        let mut at = 0;
+        for (o, s) in offsets.iter_mut().zip(sizes) {
+            *o = at;
+            at += align_up(s);
+        }
+        ImageScratchLayout {
+            counts: *counts,
+            offsets,
+            total_bytes: at,
+        }
+    }
+}

@@ -24,6 +24,9 @@ unsafe impl Plain for KdRopes {}
 unsafe impl Plain for KdEvent {}
 unsafe impl Plain for KdArenaHeader {}
 unsafe impl Plain for u32 {}
+unsafe impl Plain for coray::lcts::HistoryRecord {}
+unsafe impl Plain for coray::lcts::CornerInfo {}
+unsafe impl Plain for coray::lcts::hlcts::HlctsEntry {}
 unsafe impl Plain for u8 {}
 
 const _: () = {
@@ -34,6 +37,11 @@ const _: () = {
     assert!(size_of::<KdArenaHeader>() == 100 && align_of::<KdArenaHeader>() == 4);
     assert!(size_of::<Sphere>() == 16 && align_of::<Sphere>() == 4);
     assert!(size_of::<Cone>() == 32 && align_of::<Cone>() == 4);
+    assert!(size_of::<coray::lcts::HistoryRecord>() == 8);
+    assert!(
+        size_of::<coray::lcts::CornerInfo>() == 40 && align_of::<coray::lcts::CornerInfo>() == 4
+    );
+    assert!(size_of::<coray::lcts::hlcts::HlctsEntry>() == 96);
 };
 
 /// Checks an arena pointer: not null, aligned to [`ARENA_ALIGN`].

@@ -147,7 +147,7 @@ pub unsafe extern "C" fn coray_kdtree_build(
 /// # Safety
 /// `arena` is NULL or valid for reads of `bytes` bytes that nobody writes
 /// during `'a`; `scene`'s arrays likewise.
-unsafe fn tree<'a>(
+pub(crate) unsafe fn tree<'a>(
     arena: *const c_void,
     bytes: usize,
     scene: Scene<'a>,

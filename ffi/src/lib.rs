@@ -22,9 +22,11 @@ extern crate std;
 
 mod carve;
 mod kdtree;
+mod lcts;
 mod types;
 
 pub use kdtree::*;
+pub use lcts::*;
 pub use types::*;
 
 /// Status of every entry point. Numbers are fixed forever.

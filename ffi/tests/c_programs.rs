@@ -91,6 +91,11 @@ fn readme_example_is_the_tested_one_and_runs() {
 }
 
 #[test]
+fn lcts_casting_and_patch_visibility() {
+    assert!(run_program("lcts", &[]).contains("lcts: ok"));
+}
+
+#[test]
 fn embree_crosscheck() {
     let out = run_program("embree_crosscheck", &["-lembree3"]);
     assert!(out.contains("embree_crosscheck: ok"));

@@ -1,0 +1,153 @@
+/* LCTS through the C ABI: every casting scheme gives the hierarchical
+ * traversal's image bit for bit; patch-to-patch visibility equals casting
+ * the same segments one by one; bad parameters get their status. */
+#include "common.h"
+
+static CorayCamera camera(uint32_t w, uint32_t h) {
+    CorayCamera c;
+    memset(&c, 0, sizeof c);
+    c.struct_size = sizeof c;
+    c.from[0] = 0.3f; c.from[1] = 0.9f; c.from[2] = 2.8f;
+    c.up[1] = 1.0f;
+    c.angle_deg = 50.0f;
+    c.width = w;
+    c.height = h;
+    return c;
+}
+
+int main(void) {
+    TestScene ts;
+    Tree tree;
+    CorayCamera cam = camera(97, 61);
+    size_t n = (size_t)cam.width * cam.height, i;
+    float *t_ref = malloc(n * sizeof(float)), *t = malloc(n * sizeof(float));
+    uint32_t *p_ref = malloc(n * sizeof(uint32_t)), *p = malloc(n * sizeof(uint32_t));
+    uint32_t scheme;
+    CorayCastParams cp = coray_cast_params_default();
+    CorayCastStats st, st_ref;
+    size_t bytes = 0;
+    void *scratch;
+    rng_state = 31;
+    ts = scene_random(3000, 400, 400, 1.0f);
+    tree = tree_build(&ts.view, CORAY_KD_PRESET_PAPER);
+
+    cp.scheme = CORAY_SCHEME_HIERARCHICAL;
+    CHECK_STATUS(coray_cast_requirements(&cam, &cp, &bytes), CORAY_STATUS_OK);
+    CHECK(bytes == 0);
+    CHECK_STATUS(coray_kdtree_cast_image(tree.arena, tree.bytes, &ts.view, &cam, &cp, NULL, 0, t_ref, p_ref, &st_ref), CORAY_STATUS_OK);
+    {
+        size_t hits = 0;
+        for (i = 0; i < n; i++) hits += p_ref[i] != CORAY_INVALID_ID;
+        CHECK(hits > n / 10);
+    }
+    for (scheme = CORAY_SCHEME_ROPES; scheme <= CORAY_SCHEME_HLCTS_2D; scheme++) {
+        cp = coray_cast_params_default();
+        cp.scheme = scheme;
+        CHECK_STATUS(coray_cast_requirements(&cam, &cp, &bytes), CORAY_STATUS_OK);
+        scratch = arena_alloc(bytes);
+        if (bytes > 0) {
+            CHECK_STATUS(coray_kdtree_cast_image(tree.arena, tree.bytes, &ts.view, &cam, &cp, scratch, bytes - 1, t, p, &st), CORAY_STATUS_ARENA_TOO_SMALL);
+        }
+        memset(t, 0, n * sizeof(float));
+        CHECK_STATUS(coray_kdtree_cast_image(tree.arena, tree.bytes, &ts.view, &cam, &cp, scratch, bytes, t, p, &st), CORAY_STATUS_OK);
+        CHECK(memcmp(t, t_ref, n * sizeof(float)) == 0);
+        CHECK(memcmp(p, p_ref, n * sizeof(uint32_t)) == 0);
+        if (scheme >= CORAY_SCHEME_SLCTS_1D) CHECK(st.windows > 0);
+        printf("scheme %u: %llu traversal steps (hierarchical %llu), %llu windows, %llu shared\n", scheme,
+               (unsigned long long)st.trace.traversal_steps, (unsigned long long)st_ref.trace.traversal_steps,
+               (unsigned long long)st.windows, (unsigned long long)st.windows_shared);
+        free(scratch);
+    }
+    /* Bad parameters. */
+    cp = coray_cast_params_default();
+    cp.scheme = 9;
+    CHECK_STATUS(coray_cast_requirements(&cam, &cp, &bytes), CORAY_STATUS_INVALID_PARAMETER);
+    cp = coray_cast_params_default();
+    cp.window_width = 1;
+    CHECK_STATUS(coray_cast_requirements(&cam, &cp, &bytes), CORAY_STATUS_INVALID_PARAMETER);
+    cp = coray_cast_params_default();
+    cp.history_capacity = 0;
+    CHECK_STATUS(coray_cast_requirements(&cam, &cp, &bytes), CORAY_STATUS_INVALID_PARAMETER);
+    {
+        CorayCamera bad = cam;
+        bad.width = 0;
+        cp = coray_cast_params_default();
+        CHECK_STATUS(coray_cast_requirements(&bad, &cp, &bytes), CORAY_STATUS_INVALID_PARAMETER);
+        bad = cam;
+        bad.angle_deg = NAN;
+        CHECK_STATUS(coray_cast_requirements(&bad, &cp, &bytes), CORAY_STATUS_INVALID_PARAMETER);
+        CHECK_STATUS(coray_cast_requirements(NULL, &cp, &bytes), CORAY_STATUS_NULL_POINTER);
+    }
+    cp = coray_cast_params_default();
+    CHECK_STATUS(coray_kdtree_cast_image(tree.arena, tree.bytes, &ts.view, &cam, &cp, NULL, 0, t, p, NULL), CORAY_STATUS_NULL_POINTER);
+
+    /* Patch-to-patch visibility against casting the same segments. */
+    {
+        size_t pb = coray_patch_requirements(512);
+        void *ps = arena_alloc(pb);
+        int pair, partial = 0;
+        for (pair = 0; pair < 20; pair++) {
+            float a[12], b[12], u[3], v[3], ca[3], cb[3];
+            int k, ia, ib, nside = 4, visible = 0;
+            CorayPatchResult r;
+            for (k = 0; k < 3; k++) {
+                ca[k] = rng_range(-1, 1);
+                cb[k] = rng_range(-1, 1);
+            }
+            rng_unit(u);
+            rng_unit(v);
+            for (k = 0; k < 3; k++) {
+                float s = 0.05f;
+                a[0 + k] = ca[k] - s * u[k] - s * v[k];
+                a[3 + k] = ca[k] + s * u[k] - s * v[k];
+                a[6 + k] = ca[k] + s * u[k] + s * v[k];
+                a[9 + k] = ca[k] - s * u[k] + s * v[k];
+                b[0 + k] = cb[k] - s * u[k];
+                b[3 + k] = cb[k] + s * v[k];
+                b[6 + k] = cb[k] + s * u[k];
+            }
+            CHECK_STATUS(coray_kdtree_patch_visibility(tree.arena, tree.bytes, &ts.view, a, 4, b, 3, (uint32_t)nside, 1e-4f, ps, pb, &r), CORAY_STATUS_OK);
+            /* The same sample points: bilinear on the quad, the triangle map on the triangle. */
+            for (ia = 0; ia < nside * nside; ia++) {
+                float su = (float)(ia % nside) / (float)(nside - 1), sv = (float)(ia / nside) / (float)(nside - 1), P[3];
+                for (k = 0; k < 3; k++) {
+                    float e0 = a[k] + (a[3 + k] - a[k]) * su, e1 = a[9 + k] + (a[6 + k] - a[9 + k]) * su;
+                    P[k] = e0 + (e1 - e0) * sv;
+                }
+                for (ib = 0; ib < nside * nside; ib++) {
+                    float tu = (float)(ib % nside) / (float)(nside - 1), tv = (float)(ib / nside) / (float)(nside - 1), Q[3];
+                    CorayRay ray;
+                    CorayHit h;
+                    for (k = 0; k < 3; k++) Q[k] = b[k] + (b[3 + k] - b[k]) * (tu * (1 - tv)) + (b[6 + k] - b[k]) * (tu * tv);
+                    for (k = 0; k < 3; k++) {
+                        ray.org[k] = P[k];
+                        ray.dir[k] = Q[k] - P[k];
+                    }
+                    ray.tnear = 1e-4f;
+                    ray.tfar = 1.0f - 1e-4f;
+                    CHECK_STATUS(coray_kdtree_intersect1(tree.arena, tree.bytes, &ts.view, CORAY_TRAVERSAL_HIERARCHICAL, &ray, &h, NULL), CORAY_STATUS_OK);
+                    visible += h.geom_id == CORAY_INVALID_ID;
+                }
+            }
+            CHECK(r.samples == (uint32_t)(nside * nside * nside * nside));
+            CHECK(r.visible == (uint32_t)visible);
+            partial += visible > 0 && visible < (int)r.samples;
+        }
+        printf("patch pairs: 20, partly visible: %d\n", partial);
+        CHECK(partial > 0);
+        {
+            float a[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+            CorayPatchResult r;
+            CHECK_STATUS(coray_kdtree_patch_visibility(tree.arena, tree.bytes, &ts.view, a, 2, a, 3, 4, 1e-4f, ps, pb, &r), CORAY_STATUS_INVALID_PARAMETER);
+            CHECK_STATUS(coray_kdtree_patch_visibility(tree.arena, tree.bytes, &ts.view, a, 3, a, 3, 4, 1e-4f, ps, 8, &r), CORAY_STATUS_ARENA_TOO_SMALL);
+        }
+        free(ps);
+    }
+    free(t_ref);
+    free(t);
+    free(p_ref);
+    free(p);
+    free(tree.arena);
+    scene_free(&ts);
+    return finish("lcts");
+}
