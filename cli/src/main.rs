@@ -130,6 +130,17 @@ fn parse_res(s: &str) -> Result<(u32, u32), String> {
     Ok((p(w)?, p(h)?))
 }
 
+/// A scene with its camera set to `res` x `res` pixels.
+fn load_square(scene: &str, res: u32, opts: &Options) -> Result<scene::SceneData, String> {
+    if res == 0 {
+        return Err("--res must be at least 1".into());
+    }
+    let mut s = scene::load(scene, opts)?;
+    s.mesh.camera.width = res;
+    s.mesh.camera.height = res;
+    Ok(s)
+}
+
 fn run(command: Command, opts: &Options) -> Result<(), String> {
     match command {
         Command::Render {
@@ -191,12 +202,7 @@ fn run(command: Command, opts: &Options) -> Result<(), String> {
             repeat,
             json,
         } => {
-            let mut s = scene::load(&scene, opts)?;
-            if res == 0 {
-                return Err("--res must be at least 1".into());
-            }
-            s.mesh.camera.width = res;
-            s.mesh.camera.height = res;
+            let s = load_square(&scene, res, opts)?;
             let params = kdbuild::preset(&preset)?;
             let methods = methods
                 .unwrap_or_else(|| bench::all_methods().iter().map(|m| m.to_string()).collect());
@@ -215,12 +221,7 @@ fn run(command: Command, opts: &Options) -> Result<(), String> {
             preset,
             diff,
         } => {
-            let mut s = scene::load(&scene, opts)?;
-            if res == 0 {
-                return Err("--res must be at least 1".into());
-            }
-            s.mesh.camera.width = res;
-            s.mesh.camera.height = res;
+            let s = load_square(&scene, res, opts)?;
             let out = compare::compare(&s, &kdbuild::preset(&preset)?, &diff)?;
             if out.mismatches > 0 {
                 eprintln!(

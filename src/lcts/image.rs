@@ -538,73 +538,51 @@ impl<F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, F> {
         if !can_x && !can_y {
             return;
         }
-        // Corners: 0 (x0, y0), 1 (x1, y0), 2 (x0, y1), 3 (x1, y1).
+        // Corners: 0 (x0, y0), 1 (x1, y0), 2 (x0, y1), 3 (x1, y1). A split
+        // traces two rays, a and b, on the edges it cuts; each half keeps two
+        // old corners and takes a and b as the other two.
         let split_x = can_x && (!can_y || depth % 2 == 0);
-        if split_x {
-            let xm = (x0 + x1) / 2;
-            let (a, free) = self.split_ray(xm, y0, &cut, free);
-            let (b, free) = self.split_ray(xm, y1, &cut, free);
-            let entries = cut.as_slice();
-            let Free {
-                records,
-                starts,
-                hlcts,
-            } = free;
-            self.shaft(
-                [x0, y0, xm, y1],
-                &[old(0), a, old(2), b],
-                entries,
-                depth + 1,
-                Free {
-                    records,
-                    starts,
-                    hlcts: &mut *hlcts,
-                },
-            );
-            self.shaft(
-                [xm, y0, x1, y1],
-                &[a, old(1), b, old(3)],
-                entries,
-                depth + 1,
-                Free {
-                    records,
-                    starts,
-                    hlcts,
-                },
-            );
+        let (xm, ym) = ((x0 + x1) / 2, (y0 + y1) / 2);
+        let (pa, pb, halves) = if split_x {
+            ((xm, y0), (xm, y1), [[x0, y0, xm, y1], [xm, y0, x1, y1]])
         } else {
-            let ym = (y0 + y1) / 2;
-            let (a, free) = self.split_ray(x0, ym, &cut, free);
-            let (b, free) = self.split_ray(x1, ym, &cut, free);
-            let entries = cut.as_slice();
-            let Free {
+            ((x0, ym), (x1, ym), [[x0, y0, x1, ym], [x0, ym, x1, y1]])
+        };
+        let (a, free) = self.split_ray(pa.0, pa.1, &cut, free);
+        let (b, free) = self.split_ray(pb.0, pb.1, &cut, free);
+        let (first, second) = if split_x {
+            ([old(0), a, old(2), b], [a, old(1), b, old(3)])
+        } else {
+            ([old(0), old(1), a, b], [a, b, old(2), old(3)])
+        };
+        let entries = cut.as_slice();
+        let Free {
+            records,
+            starts,
+            hlcts,
+        } = free;
+        self.shaft(
+            halves[0],
+            &first,
+            entries,
+            depth + 1,
+            Free {
+                records,
+                starts,
+                hlcts: &mut *hlcts,
+            },
+        );
+        self.shaft(
+            halves[1],
+            &second,
+            entries,
+            depth + 1,
+            Free {
                 records,
                 starts,
                 hlcts,
-            } = free;
-            self.shaft(
-                [x0, y0, x1, ym],
-                &[old(0), old(1), a, b],
-                entries,
-                depth + 1,
-                Free {
-                    records,
-                    starts,
-                    hlcts: &mut *hlcts,
-                },
-            );
-            self.shaft(
-                [x0, ym, x1, y1],
-                &[a, b, old(2), old(3)],
-                entries,
-                depth + 1,
-                Free {
-                    records,
-                    starts,
-                    hlcts,
-                },
-            );
-        }
+            },
+        );
     }
 }
 
@@ -658,10 +636,9 @@ fn cast_bisection(
         st: CastStats::default(),
     };
     let root = [hlcts::root_entry(tree)];
-    let rows: &mut dyn Iterator<Item = u32> =
-        &mut (0..if scheme == Scheme::Hlcts1d { h } else { 1 });
-    let (mut records, mut starts, mut cuts) = (scratch.records, scratch.starts, scratch.hlcts);
-    for y in rows {
+    let rows = if scheme == Scheme::Hlcts1d { h } else { 1 };
+    let (records, starts, cuts) = (scratch.records, scratch.starts, scratch.hlcts);
+    for y in 0..rows {
         let ys: &[u32] = if scheme == Scheme::Hlcts1d {
             &[y, y]
         } else {
@@ -713,18 +690,6 @@ fn cast_bisection(
                 b.shaft(rect, &corners[..k], &root, 0, free);
             }
         }
-        records = {
-            let r: &mut [HistoryRecord] = records;
-            r
-        };
-        starts = {
-            let s: &mut [u32] = starts;
-            s
-        };
-        cuts = {
-            let c: &mut [HlctsEntry] = cuts;
-            c
-        };
     }
     Ok(b.st)
 }
