@@ -409,3 +409,45 @@ fn validate_accepts_sliver_leaves() {
     let rays = random_rays(&mut rng, 1000, 1.0);
     assert!(check_all(&tree, &rays, "slivers") > 200);
 }
+
+/// A checkerboard floor and ceiling on the scene's faces with a cluster of
+/// small triangles standing on the floor (SPD teapot's shape): the build
+/// cuts the planar faces off into thin cells, and rays from every side
+/// still find them. Floors at 0 (next float inside is subnormal) and away
+/// from it.
+#[test]
+fn planar_primitives_on_the_scene_faces() {
+    for z0 in [0.0f32, 1.5, -2.25] {
+        let mut rng = Rng(17);
+        let mut o = OwnedScene::default();
+        for i in 0..12 {
+            for j in 0..12 {
+                let (x, y) = (i as f32 - 6.0, j as f32 - 6.0);
+                o.add_quad(2, z0, [x, y], [x + 1.0, y + 1.0]);
+                if (i + j) % 3 == 0 {
+                    o.add_quad(2, z0 + 4.0, [x, y], [x + 1.0, y + 1.0]);
+                }
+            }
+        }
+        for _ in 0..800 {
+            let c = Vec3::new(rng.range(-2.0, 2.0), rng.range(-2.0, 2.0), 0.0);
+            let h = rng.range(0.0, 2.0);
+            o.add_triangle(
+                Vec3::new(c.x, c.y, z0),
+                Vec3::new(c.x + 0.2, c.y, z0 + h),
+                Vec3::new(c.x, c.y + 0.2, z0 + h * 0.5),
+            );
+        }
+        let mut rays = random_rays(&mut rng, 1500, 7.0);
+        for r in rays.iter_mut() {
+            r.origin.z += z0;
+        }
+        for _ in 0..1500 {
+            let from = Vec3::new(rng.range(-9.0, 9.0), rng.range(-9.0, 9.0), z0 + 3.0);
+            let to = Vec3::new(rng.range(-6.0, 6.0), rng.range(-6.0, 6.0), z0);
+            rays.push(Ray::new(from, (to - from).normalize(), 0.0, f32::INFINITY));
+        }
+        let hits = check_scene(&o, &rays, &format!("floor at {z0}"));
+        assert!(hits > 1500, "floor at {z0}: only {hits} hits");
+    }
+}

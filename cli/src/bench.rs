@@ -205,6 +205,7 @@ pub fn bench(
     methods: &[String],
     params: &KdParams,
     repeat: usize,
+    with_shadow: bool,
 ) -> Result<Vec<Row>, String> {
     for m in methods {
         if !all_methods().contains(&m.as_str()) {
@@ -215,8 +216,12 @@ pub fn bench(
         }
     }
     let primary = primary_rays(s);
-    let first = run_kd(s, params, Traversal::Hierarchical, "kd", &primary, &[], 1);
-    let shadow = shadow_rays(s, &first.hits);
+    let shadow = if with_shadow {
+        let first = run_kd(s, params, Traversal::Hierarchical, "kd", &primary, &[], 1);
+        shadow_rays(s, &first.hits)
+    } else {
+        Vec::new()
+    };
     let reference = run_kd(
         s,
         params,

@@ -10,6 +10,7 @@ mod kdbuild;
 mod render;
 mod scene;
 mod stats;
+mod tables;
 
 use clap::{Parser, Subcommand};
 use coray::kd::Traversal;
@@ -73,6 +74,15 @@ enum Command {
         /// Print one JSON object instead of a table.
         #[arg(long)]
         json: bool,
+        /// A paper's table instead of the method table: `lcts` (Havran and
+        /// Bittner's Table 2: SCENE may be a comma-separated list, or `spd:all`
+        /// for the eight SPD scenes) or `lcts-res` (Table 3: SCENE, default
+        /// spd:teapot, at 256 to --max-res pixels square).
+        #[arg(long)]
+        table: Option<String>,
+        /// `--table lcts-res`: the largest resolution (Table 3 goes to 4096).
+        #[arg(long, default_value_t = 4096)]
+        max_res: u32,
     },
     /// Primary and shadow rays through coray and Embree, ray by ray; a diff
     /// image; exits with status 1 when any ray disagrees beyond a documented tie.
@@ -201,12 +211,17 @@ fn run(command: Command, opts: &Options) -> Result<(), String> {
             preset,
             repeat,
             json,
+            table,
+            max_res,
         } => {
-            let s = load_square(&scene, res, opts)?;
             let params = kdbuild::preset(&preset)?;
+            if let Some(table) = table {
+                return paper_table(&table, &scene, res, max_res, &params, repeat, json, opts);
+            }
+            let s = load_square(&scene, res, opts)?;
             let methods = methods
                 .unwrap_or_else(|| bench::all_methods().iter().map(|m| m.to_string()).collect());
-            let rows = bench::bench(&s, &methods, &params, repeat)?;
+            let rows = bench::bench(&s, &methods, &params, repeat, true)?;
             if json {
                 println!("{}", bench::to_json(&s, &rows));
             } else {
@@ -239,4 +254,62 @@ fn run(command: Command, opts: &Options) -> Result<(), String> {
             Ok(())
         }
     }
+}
+
+/// `coray bench --table lcts|lcts-res`.
+#[allow(clippy::too_many_arguments)]
+fn paper_table(
+    table: &str,
+    scene: &str,
+    res: u32,
+    max_res: u32,
+    params: &coray::kd::KdParams,
+    repeat: usize,
+    json: bool,
+    opts: &Options,
+) -> Result<(), String> {
+    let mut cols = Vec::new();
+    let kind = match table {
+        "lcts" => {
+            let scenes: Vec<String> = if scene == "spd:all" {
+                tables::SPD_SCENES
+                    .iter()
+                    .map(|n| format!("spd:{n}"))
+                    .collect()
+            } else {
+                scene.split(',').map(str::to_string).collect()
+            };
+            for name in &scenes {
+                let s = load_square(name, res, opts)?;
+                let label = name.strip_prefix("spd:").unwrap_or(name).to_string();
+                cols.push(tables::column(&s, label, params, repeat)?);
+            }
+            tables::Table::Scenes
+        }
+        "lcts-res" => {
+            // The default scene of `bench` is random; Table 3 is teapot's.
+            let name = if scene == "random" {
+                "spd:teapot"
+            } else {
+                scene
+            };
+            for r in tables::RESOLUTIONS.iter().filter(|&&r| r <= max_res) {
+                let s = load_square(name, *r, opts)?;
+                cols.push(tables::column(&s, format!("{r}^2"), params, repeat)?);
+            }
+            tables::Table::Resolutions
+        }
+        t => return Err(format!("unknown --table `{t}` (lcts, lcts-res)")),
+    };
+    if cols.is_empty() {
+        return Err(format!(
+            "--max-res {max_res} leaves no resolution (smallest 256)"
+        ));
+    }
+    if json {
+        println!("{}", tables::to_json(&cols));
+    } else {
+        tables::print(kind, &cols);
+    }
+    Ok(())
 }

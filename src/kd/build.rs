@@ -89,6 +89,10 @@ impl Task {
 }
 
 /// The best plane of a node's sweep.
+/// Thickness of the cell that cuts planar primitives off a node's face,
+/// relative to the node's extent or coordinates (see `find_split`).
+const FACE_CELL: f32 = 1.0 / 4096.0;
+
 #[derive(Clone, Copy, Debug)]
 struct Split {
     axis: usize,
@@ -393,19 +397,43 @@ impl<'s, 'a> Builder<'s, 'a> {
                     i += 1;
                 }
                 nr -= planars + ends;
-                if p > v.min[axis] && p < v.max[axis] {
-                    let pl = (area64(&with_max(v, axis, p)) * inv_area) as f32;
-                    let pr = (area64(&with_min(v, axis, p)) * inv_area) as f32;
+                let mut consider = |pos: f32, nl: usize, nr: usize, planars: usize| {
+                    let pl = (area64(&with_max(v, axis, pos)) * inv_area) as f32;
+                    let pr = (area64(&with_min(v, axis, pos)) * inv_area) as f32;
                     let cl = cost(pl, pr, nl + planars, nr);
                     let cr = cost(pl, pr, nl, nr + planars);
                     let (c, planar_left) = if cl <= cr { (cl, true) } else { (cr, false) };
                     if best.map_or(true, |b| c < b.cost) {
                         best = Some(Split {
                             axis,
-                            pos: p,
+                            pos,
                             planar_left,
                             cost: c,
                         });
+                    }
+                };
+                if p > v.min[axis] && p < v.max[axis] {
+                    consider(p, nl, nr, planars);
+                } else if planars > 0 {
+                    // Planar primitives on a face of the node (a floor under
+                    // the scene): a split just inside cuts them off into a
+                    // thin cell, so the cells above stop referencing them.
+                    // Primitives starting on the face straddle the split.
+                    // The cell is 2^-12 of the node's extent or of its
+                    // coordinates' magnitude, whichever is larger: thousands
+                    // of ulps, far above the rounding of a ray's points on
+                    // that face, so no traversal (from the root or from an
+                    // LCTS entry) can classify a point across it
+                    // differently. Nodes thinner than that keep their faces.
+                    let (lo, hi) = (v.min[axis], v.max[axis]);
+                    let thick = (hi - lo).max(lo.abs()).max(hi.abs()) * FACE_CELL;
+                    let inside = if p == lo { p + thick } else { p - thick };
+                    if 2.0 * thick < hi - lo {
+                        if p == v.min[axis] {
+                            consider(inside, planars + starts, nr, 0);
+                        } else {
+                            consider(inside, nl, planars + ends, 0);
+                        }
                     }
                 }
                 nl += starts + planars;
