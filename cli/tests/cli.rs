@@ -168,3 +168,66 @@ fn compare_agrees_with_embree_on_small_spd_scenes() {
     }
     assert!(d.join("coray-diff.png").exists());
 }
+
+/// `--table lcts`: one column per scene, every method's block, exact
+/// schemes (mismatches 0); `--table lcts-res` stops at --max-res.
+#[test]
+fn bench_paper_tables() {
+    let d = tmp("tables");
+    let (code, out, err) = coray(
+        &[
+            "bench",
+            "spd:tetra,spd:teapot",
+            "--res",
+            "64",
+            "--repeat",
+            "1",
+            "--table",
+            "lcts",
+        ],
+        &d,
+    );
+    assert_eq!(code, 0, "{err}");
+    for block in [
+        "hierarchical traversal",
+        "rope traversal",
+        "SLCTS-1D window 5 x 1 pixels",
+        "HLCTS-1D",
+        "SLCTS-2D window 5 x 5 pixels",
+        "HLCTS-2D",
+    ] {
+        assert!(out.contains(&format!("\n{block}\n")), "{block}: {out}");
+    }
+    let mism: Vec<&str> = out
+        .lines()
+        .filter(|l| l.trim_start().starts_with("mismatches"))
+        .collect();
+    assert_eq!(mism.len(), 6, "{out}");
+    for l in mism {
+        assert_eq!(
+            l.split_whitespace().collect::<Vec<_>>(),
+            ["mismatches", "0", "0"],
+            "{out}"
+        );
+    }
+    let (code, out, err) = coray(
+        &[
+            "bench",
+            "--table",
+            "lcts-res",
+            "--max-res",
+            "256",
+            "--repeat",
+            "1",
+            "--json",
+        ],
+        &d,
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(out.starts_with("[{\"scene\": \"spd:teapot\""), "{out}");
+    assert_eq!(out.matches("\"res\": [256, 256]").count(), 1, "{out}");
+    assert_eq!(out.matches("\"scene\"").count(), 1, "{out}");
+    let (code, _, err) = coray(&["bench", "--table", "nope", "--res", "8"], &d);
+    assert_eq!(code, 2);
+    assert!(err.contains("unknown --table `nope`"), "{err}");
+}
