@@ -16,6 +16,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod arena;
+pub mod bvh;
 pub mod error;
 pub mod geom;
 pub mod kd;

@@ -124,6 +124,20 @@ impl<'a> Scene<'a> {
         }
     }
 
+    /// Which geometry (`GEOM_TRIANGLES`, `GEOM_SPHERES`, `GEOM_CONES`) the
+    /// global primitive index `prim` names.
+    #[inline]
+    pub fn geom_of(&self, prim: usize) -> u32 {
+        let (nt, ns) = (self.triangles.len(), self.spheres.len());
+        if prim < nt {
+            GEOM_TRIANGLES
+        } else if prim < nt + ns {
+            GEOM_SPHERES
+        } else {
+            GEOM_CONES
+        }
+    }
+
     /// Tests primitive `prim` (global index) for a hit in
     /// `[ray.t_min, t_max]`.
     #[inline]

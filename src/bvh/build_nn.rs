@@ -1,0 +1,122 @@
+//! Bottom-up binary matching (thesis 2.2.2, "Bottom-Up Binary Matching"):
+//! every object starts as a cluster; the two clusters whose joint box has
+//! the smallest surface area are joined, until one is left.
+//!
+//! Each cluster keeps its best partner. Joining A and B cannot make a
+//! better partner for any other cluster C (the box of A and B and C holds
+//! the box of A and C), so only clusters whose partner was A or B look
+//! again: the same tree as the thesis' quadratic search, in O(n^2) time
+//! with O(n) work per join only for the clusters that lost their partner.
+
+use super::{check_storage, gather, requirements, Builder, Bvh, BvhInfo, BvhNode};
+use super::{BvhScratch, BvhStorage};
+use crate::geom::{Aabb, Scene};
+use crate::Error;
+
+fn joint_area(a: &BvhNode, b: &BvhNode) -> f32 {
+    a.bounds().union(&b.bounds()).area()
+}
+
+/// The best partner of cluster `k` among `0..m`: smallest joint area,
+/// lowest slot on ties.
+fn best_partner(clusters: &[BvhNode], k: usize, m: usize) -> (u32, f32) {
+    let mut best = (u32::MAX, f32::INFINITY);
+    for j in 0..m {
+        if j != k {
+            let c = joint_area(&clusters[k], &clusters[j]);
+            if c < best.1 || best.0 == u32::MAX {
+                best = (j as u32, c);
+            }
+        }
+    }
+    best
+}
+
+/// Builds a binary hierarchy by bottom-up matching; one primitive per leaf.
+pub fn build_nn<'a>(
+    scene: &Scene<'a>,
+    storage: BvhStorage<'a>,
+    scratch: BvhScratch,
+) -> Result<Bvh<'a>, Error> {
+    let req = requirements(scene.prim_count(), Builder::Nn);
+    check_storage(&req, &storage, &scratch)?;
+    let BvhStorage { nodes, refs } = storage;
+    let BvhScratch {
+        boxes,
+        keys,
+        links,
+        clusters,
+    } = scratch;
+    let n = gather(scene, boxes, refs)?;
+    for k in 0..n {
+        clusters[k] = BvhNode::leaf(&boxes[refs[k] as usize], k as u32, 1);
+    }
+    for k in 0..n {
+        (links[k], keys[k]) = best_partner(clusters, k, n);
+    }
+    let (mut m, mut top) = (n, 1usize);
+    while m > 1 {
+        let mut a = 0;
+        for k in 1..m {
+            if keys[k] < keys[a] {
+                a = k;
+            }
+        }
+        let b = links[a] as usize;
+        let (lo, hi) = (a.min(b), a.max(b));
+        nodes[top] = clusters[lo];
+        nodes[top + 1] = clusters[hi];
+        let joint = clusters[lo].bounds().union(&clusters[hi].bounds());
+        clusters[lo] = BvhNode::interior(&joint, top as u32, 2);
+        top += 2;
+        // Slot `hi` takes the last cluster.
+        let last = m - 1;
+        clusters[hi] = clusters[last];
+        keys[hi] = keys[last];
+        links[hi] = links[last];
+        m -= 1;
+        for k in 0..m {
+            let p = links[k] as usize;
+            if k == lo || p == lo || p == hi {
+                (links[k], keys[k]) = best_partner(clusters, k, m);
+            } else if p == last {
+                links[k] = hi as u32;
+            }
+        }
+    }
+    let leaf_count = n as u32;
+    nodes[0] = if n == 0 {
+        BvhNode::leaf(&Aabb::EMPTY, 0, 0)
+    } else {
+        clusters[0]
+    };
+    // Depths: a parent always sits above its children (the root at 0 aside).
+    let pair = |i: usize| i.div_ceil(2);
+    let mut depth = 0;
+    if n > 0 {
+        links[0] = 0;
+        for i in core::iter::once(0).chain((1..top).rev()) {
+            let nd = nodes[i];
+            let d = links[pair(i)];
+            if nd.is_leaf() {
+                depth = depth.max(d);
+            } else {
+                links[pair(nd.first as usize)] = d + 1;
+            }
+        }
+    }
+    let (nodes, refs): (&'a [BvhNode], &'a [u32]) = (nodes, refs);
+    Ok(Bvh {
+        scene: *scene,
+        nodes,
+        refs,
+        info: BvhInfo {
+            root: 0,
+            node_count: top as u32,
+            leaf_count,
+            ref_count: n as u32,
+            depth,
+            max_children: 2,
+        },
+    })
+}

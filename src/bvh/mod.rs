@@ -1,0 +1,176 @@
+//! Bounding volume hierarchies of axis-aligned boxes, built four ways as
+//! Bezerianos' thesis compares them (sections 2.2.2, 3.3.3, chapter 5):
+//! top-down binary splitting ([`build_tdbs`], balanced children or SAH),
+//! bottom-up matching of the pair with the smallest joint surface area
+//! ([`build_nn`]), and the R-tree and R*-tree ([`RTree`]: dynamic insert
+//! and delete in caller memory).
+//!
+//! Every builder writes the same [`BvhNode`] layout, so one traversal
+//! ([`Bvh::intersect`], [`Bvh::occluded`]) and one [`Bvh::validate`] serve
+//! all; the caller owns the traversal stack ([`Bvh::stack_len`]).
+
+mod build_nn;
+mod build_tdbs;
+mod node;
+mod rtree;
+mod traverse;
+mod validate;
+
+pub use build_nn::build_nn;
+pub use build_tdbs::build_tdbs;
+pub use node::BvhNode;
+pub use rtree::{
+    rtree_requirements, InsertOrder, RTree, RTreeParams, RTreeRequirements, Split, MAX_CHILDREN,
+};
+pub use traverse::{BvhStackItem, BvhStats, BOX_HIT_COST};
+pub use validate::BvhTreeStats;
+
+use crate::geom::{Aabb, Scene};
+use crate::Error;
+
+/// How a top-down or bottom-up hierarchy is built.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Builder {
+    /// TDBS: at each node the linear partition (objects sorted by box centre
+    /// on each axis) whose two children have the most nearly equal surface
+    /// areas, as the thesis defines it.
+    Tdbs,
+    /// The same sweep minimising the surface area heuristic
+    /// `A_L * n_L + A_R * n_R` instead.
+    TdbsSah,
+    /// Bottom-up: repeatedly join the two clusters whose joint box has the
+    /// smallest surface area.
+    Nn,
+}
+
+/// Storage of a static hierarchy over `n` primitives: `2n - 1` nodes,
+/// `n` references, and build scratch of `n` of each scratch kind.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BvhRequirements {
+    /// [`BvhNode`] slots of the hierarchy.
+    pub nodes: usize,
+    /// Primitive references (`u32`).
+    pub refs: usize,
+    /// Scratch: primitive boxes.
+    pub boxes: usize,
+    /// Scratch: `f32` keys (areas, costs).
+    pub keys: usize,
+    /// Scratch: `u32` links (NN partners).
+    pub links: usize,
+    /// Scratch: [`BvhNode`] cluster roots (NN only).
+    pub clusters: usize,
+}
+
+/// Room for a static hierarchy over `prim_count` primitives built by `builder`.
+pub fn requirements(prim_count: usize, builder: Builder) -> BvhRequirements {
+    let n = prim_count;
+    BvhRequirements {
+        nodes: (2 * n).saturating_sub(1).max(1),
+        refs: n,
+        boxes: n,
+        keys: n,
+        links: n,
+        clusters: if builder == Builder::Nn { n } else { 0 },
+    }
+}
+
+/// Where a static build writes the hierarchy.
+pub struct BvhStorage<'a> {
+    /// At least [`BvhRequirements::nodes`].
+    pub nodes: &'a mut [BvhNode],
+    /// At least [`BvhRequirements::refs`].
+    pub refs: &'a mut [u32],
+}
+
+/// Build scratch; free to reuse once the build returns.
+pub struct BvhScratch<'a> {
+    /// At least [`BvhRequirements::boxes`].
+    pub boxes: &'a mut [Aabb],
+    /// At least [`BvhRequirements::keys`].
+    pub keys: &'a mut [f32],
+    /// At least [`BvhRequirements::links`].
+    pub links: &'a mut [u32],
+    /// At least [`BvhRequirements::clusters`].
+    pub clusters: &'a mut [BvhNode],
+}
+
+/// Shape of a built hierarchy.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[repr(C)]
+pub struct BvhInfo {
+    /// Index of the root node.
+    pub root: u32,
+    /// Nodes in use (interior and leaf).
+    pub node_count: u32,
+    /// Leaves in use.
+    pub leaf_count: u32,
+    /// References in leaves (each primitive once).
+    pub ref_count: u32,
+    /// Levels below the root (a lone leaf has depth 0).
+    pub depth: u32,
+    /// Most children a node may have (2, or the R-tree's M).
+    pub max_children: u32,
+}
+
+/// A built hierarchy over a scene, borrowing the caller's memory.
+#[derive(Clone, Copy)]
+pub struct Bvh<'a> {
+    /// The primitives.
+    pub scene: Scene<'a>,
+    /// Nodes (the R-tree's may include free blocks).
+    pub nodes: &'a [BvhNode],
+    /// References from leaves to global primitive indices.
+    pub refs: &'a [u32],
+    /// Shape.
+    pub info: BvhInfo,
+}
+
+impl Bvh<'_> {
+    /// Entries of the traversal stack that [`Bvh::intersect`] and
+    /// [`Bvh::occluded`] need: a node's children are pushed together, so
+    /// `depth * (max_children - 1) + 1`.
+    pub fn stack_len(&self) -> usize {
+        self.info.depth as usize * (self.info.max_children.max(2) as usize - 1) + 1
+    }
+}
+
+pub(crate) fn check_storage(
+    req: &BvhRequirements,
+    s: &BvhStorage,
+    k: &BvhScratch,
+) -> Result<(), Error> {
+    let checks = [
+        ("nodes", req.nodes, s.nodes.len()),
+        ("refs", req.refs, s.refs.len()),
+        ("boxes", req.boxes, k.boxes.len()),
+        ("keys", req.keys, k.keys.len()),
+        ("links", req.links, k.links.len()),
+        ("clusters", req.clusters, k.clusters.len()),
+    ];
+    for (slice, needed, got) in checks {
+        if got < needed {
+            return Err(Error::SliceTooSmall { slice, needed, got });
+        }
+    }
+    Ok(())
+}
+
+/// Boxes of the scene's non-degenerate primitives into `boxes`, their
+/// indices into `refs`; returns how many (degenerate ones are never hit
+/// and stay out of the hierarchy).
+pub(crate) fn gather(scene: &Scene, boxes: &mut [Aabb], refs: &mut [u32]) -> Result<usize, Error> {
+    if scene.prim_count() > u32::MAX as usize / 2 {
+        return Err(Error::TooManyPrimitives {
+            count: scene.prim_count(),
+        });
+    }
+    let mut n = 0;
+    for (p, slot) in boxes.iter_mut().enumerate().take(scene.prim_count()) {
+        if let Some(b) = scene.prim_bounds(p) {
+            *slot = b;
+            refs[n] = p as u32;
+            n += 1;
+        }
+    }
+    Ok(n)
+}

@@ -1,0 +1,812 @@
+//! R-tree (Guttman 1984) and R*-tree (Beckmann, Kriegel, Schneider and
+//! Seeger 1990) over the scene's primitive boxes, in caller memory, with
+//! dynamic insert and delete.
+//!
+//! Layout: slot 0 of `nodes` holds the root; every node owns a block of
+//! `max_children` slots for its entries, in `nodes` (interior) or `refs`
+//! (leaf). Blocks all have one size, so freed ones go on a free list and
+//! never fragment. "Area" is surface area throughout (the thesis' measure;
+//! flat primitives would make every volume 0), "margin" the sum of a box's
+//! edge lengths.
+
+use super::{Bvh, BvhInfo, BvhNode};
+use crate::geom::{Aabb, Scene};
+use crate::Error;
+
+/// Most entries a node may have (the R-tree's M).
+pub const MAX_CHILDREN: u32 = 32;
+/// Height limit: with at least 2 entries per node, 2^40 objects.
+const MAX_HEIGHT: usize = 40;
+const NONE: u32 = u32::MAX;
+
+/// How a full node is split and where an object goes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Split {
+    /// Guttman: least area enlargement (ties: smallest area), quadratic split.
+    Quadratic,
+    /// R*: least overlap enlargement just above the leaves, split axis by
+    /// margin, split index by overlap then area. No forced reinsertion
+    /// (the thesis ran without it).
+    RStar,
+}
+
+/// The order in which [`RTree::build`] inserts the primitives.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum InsertOrder {
+    /// Scene order.
+    Scene,
+    /// A Fisher-Yates shuffle seeded with this value (SplitMix64).
+    Shuffled(u64),
+    /// Sorted by the Morton code of the box centre (10 bits per axis).
+    Sorted,
+}
+
+/// R-tree parameters.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RTreeParams {
+    /// Split and choose-subtree rules.
+    pub split: Split,
+    /// M: most entries per node, 4 to [`MAX_CHILDREN`].
+    pub max_children: u32,
+    /// m: fewest entries per node but the root, 2 to M / 2.
+    pub min_children: u32,
+    /// Insertion order of [`RTree::build`].
+    pub order: InsertOrder,
+}
+
+impl RTreeParams {
+    /// Guttman's R-tree, M = 8, m = 3 (m about 40% of M), scene order.
+    pub const fn rtree() -> RTreeParams {
+        RTreeParams {
+            split: Split::Quadratic,
+            max_children: 8,
+            min_children: 3,
+            order: InsertOrder::Scene,
+        }
+    }
+    /// The R*-tree with the same M and m.
+    pub const fn rstar() -> RTreeParams {
+        RTreeParams {
+            split: Split::RStar,
+            ..RTreeParams::rtree()
+        }
+    }
+
+    fn check(&self) -> Result<(), Error> {
+        let (big, small) = (self.max_children, self.min_children);
+        if !(4..=MAX_CHILDREN).contains(&big) {
+            return Err(Error::InvalidParameter {
+                name: "max_children",
+            });
+        }
+        if small < 2 || small > big / 2 {
+            return Err(Error::InvalidParameter {
+                name: "min_children",
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Room for an R-tree of up to `capacity` primitives: every node but the
+/// root holds at least m entries, so leaves and interior nodes are bounded.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RTreeRequirements {
+    /// [`BvhNode`] slots: the root slot and one block per interior node.
+    pub nodes: usize,
+    /// Reference slots: one block per leaf.
+    pub refs: usize,
+    /// Scratch `u32`s: the insertion order of a build, the orphans of a delete.
+    pub scratch: usize,
+}
+
+/// Room for an R-tree of up to `capacity` objects with `params`.
+pub fn rtree_requirements(capacity: usize, params: &RTreeParams) -> RTreeRequirements {
+    let big = params.max_children.clamp(4, MAX_CHILDREN) as usize;
+    let small = params.min_children.clamp(2, big as u32 / 2) as usize;
+    let leaves = (capacity / small).max(1);
+    let (mut x, mut interior) = (leaves, 0usize);
+    while x > 1 {
+        x = x.div_ceil(small);
+        interior += x;
+    }
+    RTreeRequirements {
+        nodes: 1 + big * (interior + 1),
+        refs: big * (leaves + 1),
+        scratch: capacity,
+    }
+}
+
+/// A dynamic R-tree or R*-tree borrowing the caller's memory.
+pub struct RTree<'a> {
+    scene: Scene<'a>,
+    nodes: &'a mut [BvhNode],
+    refs: &'a mut [u32],
+    params: RTreeParams,
+    /// Levels below the root.
+    height: u32,
+    node_blocks: u32,
+    ref_blocks: u32,
+    free_nodes: u32,
+    free_refs: u32,
+    len: u32,
+}
+
+/// One entry while a node is being split: a child node, or (at leaf
+/// level) a primitive carried in `first`.
+type Entry = BvhNode;
+
+fn margin(b: &Aabb) -> f32 {
+    let e = b.max - b.min;
+    e.x + e.y + e.z
+}
+
+fn enlarged(b: &Aabb, add: &Aabb) -> f32 {
+    b.union(add).area() - b.area()
+}
+
+fn morton(c: crate::Vec3, lo: crate::Vec3, hi: crate::Vec3) -> u32 {
+    let spread = |v: u32| {
+        let mut x = v & 0x3ff;
+        x = (x | (x << 16)) & 0x030000ff;
+        x = (x | (x << 8)) & 0x0300f00f;
+        x = (x | (x << 4)) & 0x030c30c3;
+        (x | (x << 2)) & 0x09249249
+    };
+    let q = |a: usize| {
+        let w = hi[a] - lo[a];
+        let t = if w > 0.0 { (c[a] - lo[a]) / w } else { 0.0 };
+        (t.clamp(0.0, 1.0) * 1023.0) as u32
+    };
+    spread(q(0)) | (spread(q(1)) << 1) | (spread(q(2)) << 2)
+}
+
+impl<'a> RTree<'a> {
+    /// An empty tree over `scene` (objects enter with [`RTree::insert`]).
+    pub fn new(
+        scene: &Scene<'a>,
+        params: RTreeParams,
+        nodes: &'a mut [BvhNode],
+        refs: &'a mut [u32],
+    ) -> Result<RTree<'a>, Error> {
+        params.check()?;
+        let big = params.max_children as usize;
+        if nodes.is_empty() {
+            return Err(Error::SliceTooSmall {
+                slice: "nodes",
+                needed: 1,
+                got: 0,
+            });
+        }
+        if refs.len() < big {
+            return Err(Error::SliceTooSmall {
+                slice: "refs",
+                needed: big,
+                got: refs.len(),
+            });
+        }
+        let mut t = RTree {
+            scene: *scene,
+            nodes,
+            refs,
+            params,
+            height: 0,
+            node_blocks: 0,
+            ref_blocks: 0,
+            free_nodes: NONE,
+            free_refs: NONE,
+            len: 0,
+        };
+        let b = t.alloc_refs().expect("checked above");
+        t.nodes[0] = BvhNode::leaf(&Aabb::EMPTY, b, 0);
+        Ok(t)
+    }
+
+    /// A tree holding every non-degenerate primitive of `scene`, inserted
+    /// one at a time in `params.order`; `order` is scratch of
+    /// [`RTreeRequirements::scratch`] entries.
+    pub fn build(
+        scene: &Scene<'a>,
+        params: RTreeParams,
+        nodes: &'a mut [BvhNode],
+        refs: &'a mut [u32],
+        order: &mut [u32],
+    ) -> Result<RTree<'a>, Error> {
+        let mut t = RTree::new(scene, params, nodes, refs)?;
+        let mut n = 0;
+        let mut bounds = Aabb::EMPTY;
+        for p in 0..scene.prim_count() {
+            if let Some(b) = scene.prim_bounds(p) {
+                if n == order.len() {
+                    return Err(Error::SliceTooSmall {
+                        slice: "order",
+                        needed: scene.prim_count(),
+                        got: order.len(),
+                    });
+                }
+                order[n] = p as u32;
+                bounds = bounds.union(&b);
+                n += 1;
+            }
+        }
+        let order = &mut order[..n];
+        match params.order {
+            InsertOrder::Scene => {}
+            InsertOrder::Shuffled(seed) => {
+                let mut s = seed;
+                for i in (1..n).rev() {
+                    s = s.wrapping_add(0x9E37_79B9_7F4A_7C15);
+                    let mut z = s;
+                    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+                    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+                    z ^= z >> 31;
+                    order.swap(i, (z % (i as u64 + 1)) as usize);
+                }
+            }
+            InsertOrder::Sorted => {
+                let key = |p: u32| {
+                    let b = scene.prim_bounds(p as usize).unwrap_or(Aabb::EMPTY);
+                    (morton(0.5 * (b.min + b.max), bounds.min, bounds.max), p)
+                };
+                order.sort_unstable_by_key(|&p| key(p));
+            }
+        }
+        for &p in order.iter() {
+            t.insert(p)?;
+        }
+        Ok(t)
+    }
+
+    /// Objects in the tree.
+    pub fn len(&self) -> u32 {
+        self.len
+    }
+
+    /// True when the tree holds nothing.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// The tree for tracing (and [`Bvh::validate`]).
+    pub fn bvh(&self) -> Bvh<'_> {
+        let big = self.params.max_children;
+        Bvh {
+            scene: self.scene,
+            nodes: self.nodes,
+            refs: self.refs,
+            info: BvhInfo {
+                root: 0,
+                node_count: self.live_nodes(),
+                leaf_count: self.ref_blocks - self.free_count(self.free_refs, false),
+                ref_count: self.len,
+                depth: self.height,
+                max_children: big,
+            },
+        }
+    }
+
+    /// The parameters it was made with.
+    pub fn params(&self) -> RTreeParams {
+        self.params
+    }
+
+    /// Nodes in use: the root and every entry of an interior node.
+    fn live_nodes(&self) -> u32 {
+        let mut stack = [0u32; MAX_HEIGHT * MAX_CHILDREN as usize];
+        let (mut sp, mut n) = (1usize, 0u32);
+        while sp > 0 {
+            sp -= 1;
+            let nd = self.nodes[stack[sp] as usize];
+            n += 1;
+            if !nd.is_leaf() {
+                for i in 0..nd.len() {
+                    stack[sp] = nd.first + i;
+                    sp += 1;
+                }
+            }
+        }
+        n
+    }
+
+    fn free_count(&self, mut head: u32, nodes: bool) -> u32 {
+        let mut n = 0;
+        while head != NONE {
+            n += 1;
+            head = if nodes {
+                self.nodes[head as usize].first
+            } else {
+                self.refs[head as usize]
+            };
+        }
+        n
+    }
+
+    fn alloc_nodes(&mut self) -> Option<u32> {
+        let big = self.params.max_children as usize;
+        if self.free_nodes != NONE {
+            let b = self.free_nodes;
+            self.free_nodes = self.nodes[b as usize].first;
+            return Some(b);
+        }
+        let start = 1 + self.node_blocks as usize * big;
+        if start + big > self.nodes.len() {
+            return None;
+        }
+        self.node_blocks += 1;
+        Some(start as u32)
+    }
+
+    fn alloc_refs(&mut self) -> Option<u32> {
+        let big = self.params.max_children as usize;
+        if self.free_refs != NONE {
+            let b = self.free_refs;
+            self.free_refs = self.refs[b as usize];
+            return Some(b);
+        }
+        let start = self.ref_blocks as usize * big;
+        if start + big > self.refs.len() {
+            return None;
+        }
+        self.ref_blocks += 1;
+        Some(start as u32)
+    }
+
+    fn free_block(&mut self, leaf: bool, b: u32) {
+        if leaf {
+            self.refs[b as usize] = self.free_refs;
+            self.free_refs = b;
+        } else {
+            self.nodes[b as usize].first = self.free_nodes;
+            self.free_nodes = b;
+        }
+    }
+
+    /// Blocks still obtainable: free lists plus untouched room.
+    fn room(&self) -> (usize, usize) {
+        let big = self.params.max_children as usize;
+        let nodes = self.free_count(self.free_nodes, true) as usize + (self.nodes.len() - 1) / big
+            - self.node_blocks as usize;
+        let refs = self.free_count(self.free_refs, false) as usize + self.refs.len() / big
+            - self.ref_blocks as usize;
+        (nodes, refs)
+    }
+
+    fn entry_box(&self, leaf: bool, block: u32, i: u32) -> Aabb {
+        if leaf {
+            let p = self.refs[(block + i) as usize] as usize;
+            self.scene.prim_bounds(p).unwrap_or(Aabb::EMPTY)
+        } else {
+            self.nodes[(block + i) as usize].bounds()
+        }
+    }
+
+    /// Recomputes the box of the node in `slot` from its entries.
+    fn refit(&mut self, slot: u32) {
+        let nd = self.nodes[slot as usize];
+        let mut b = Aabb::EMPTY;
+        for i in 0..nd.len() {
+            b = b.union(&self.entry_box(nd.is_leaf(), nd.first, i));
+        }
+        self.nodes[slot as usize].set_bounds(&b);
+    }
+
+    /// The entry of interior node `nd` that `add` should go into.
+    fn choose_subtree(&self, nd: &BvhNode, add: &Aabb) -> u32 {
+        let kids = &self.nodes[nd.first as usize..(nd.first + nd.len()) as usize];
+        let above_leaves = kids[0].is_leaf();
+        let mut best = (0u32, f32::INFINITY, f32::INFINITY, f32::INFINITY);
+        for (i, k) in kids.iter().enumerate() {
+            let b = k.bounds();
+            let grow = enlarged(&b, add);
+            let overlap = if self.params.split == Split::RStar && above_leaves {
+                let bigger = b.union(add);
+                kids.iter()
+                    .enumerate()
+                    .filter(|(j, _)| *j != i)
+                    .map(|(_, o)| {
+                        let ob = o.bounds();
+                        bigger.intersection(&ob).area() - b.intersection(&ob).area()
+                    })
+                    .sum()
+            } else {
+                0.0
+            };
+            let key = (overlap, grow, b.area());
+            if key < (best.1, best.2, best.3) {
+                best = (i as u32, key.0, key.1, key.2);
+            }
+        }
+        best.0
+    }
+
+    /// Inserts primitive `prim`. A degenerate primitive is not stored (it
+    /// is never hit). Without room for the splits this insert needs, the
+    /// tree is left as it was and `SliceTooSmall` names the slice.
+    pub fn insert(&mut self, prim: u32) -> Result<(), Error> {
+        if prim as usize >= self.scene.prim_count() {
+            return Err(Error::InvalidParameter { name: "prim" });
+        }
+        let Some(pb) = self.scene.prim_bounds(prim as usize) else {
+            return Ok(());
+        };
+        let big = self.params.max_children;
+        // Path from the root to the leaf, as slots.
+        let mut path = [0u32; MAX_HEIGHT + 1];
+        let mut depth = 0;
+        let mut slot = 0u32;
+        while !self.nodes[slot as usize].is_leaf() {
+            let nd = self.nodes[slot as usize];
+            path[depth] = slot;
+            depth += 1;
+            slot = nd.first + self.choose_subtree(&nd, &pb);
+        }
+        path[depth] = slot;
+        // Splits needed: full nodes from the leaf up; one more block when the root splits.
+        let mut splits = 0;
+        while splits <= depth && self.nodes[path[depth - splits] as usize].len() == big {
+            splits += 1;
+        }
+        let (node_room, ref_room) = self.room();
+        let need_nodes = splits.saturating_sub(1) + (splits == depth + 1) as usize;
+        if splits > 0 && ref_room < 1 {
+            return Err(Error::SliceTooSmall {
+                slice: "refs",
+                needed: self.refs.len() + big as usize,
+                got: self.refs.len(),
+            });
+        }
+        if need_nodes > node_room || (splits == depth + 1 && depth + 1 > MAX_HEIGHT) {
+            return Err(Error::SliceTooSmall {
+                slice: "nodes",
+                needed: self.nodes.len() + (need_nodes - node_room) * big as usize,
+                got: self.nodes.len(),
+            });
+        }
+        // Entry to add at the current level, climbing while nodes overflow.
+        let mut entry = BvhNode::leaf(&pb, prim, 1);
+        let mut level = depth as isize;
+        loop {
+            let s = path[level as usize];
+            let nd = self.nodes[s as usize];
+            if nd.len() < big {
+                self.put(nd.is_leaf(), nd.first + nd.len(), &entry);
+                self.nodes[s as usize].set_len(nd.len() + 1);
+                self.refit(s);
+                break;
+            }
+            let sibling = self.split(s, &entry);
+            if level == 0 {
+                // The root split: a new root over the old one and its sibling.
+                let b = self.alloc_nodes().expect("room checked");
+                let old = self.nodes[0];
+                self.nodes[b as usize] = old;
+                self.nodes[b as usize + 1] = sibling;
+                let joint = old.bounds().union(&sibling.bounds());
+                self.nodes[0] = BvhNode::interior(&joint, b, 2);
+                self.height += 1;
+                break;
+            }
+            entry = sibling;
+            level -= 1;
+        }
+        for l in (0..level.max(0) as usize).rev() {
+            self.refit(path[l]);
+        }
+        self.len += 1;
+        Ok(())
+    }
+
+    fn put(&mut self, leaf: bool, at: u32, e: &Entry) {
+        if leaf {
+            self.refs[at as usize] = e.first;
+        } else {
+            self.nodes[at as usize] = *e;
+        }
+    }
+
+    /// Splits the full node in `slot` plus `extra` into two groups: the
+    /// first stays in the node's block, the second goes to a new block,
+    /// returned as the node's new sibling.
+    fn split(&mut self, slot: u32, extra: &Entry) -> Entry {
+        let nd = self.nodes[slot as usize];
+        let leaf = nd.is_leaf();
+        let n = nd.len() as usize + 1;
+        let mut e = [BvhNode::default(); MAX_CHILDREN as usize + 1];
+        for (i, x) in e.iter_mut().enumerate().take(n - 1) {
+            *x = if leaf {
+                let p = self.refs[(nd.first + i as u32) as usize];
+                BvhNode::leaf(&self.entry_box(true, nd.first, i as u32), p, 1)
+            } else {
+                self.nodes[(nd.first + i as u32) as usize]
+            };
+        }
+        e[n - 1] = *extra;
+        let m = self.params.min_children as usize;
+        let second = match self.params.split {
+            Split::Quadratic => quadratic_split(&e[..n], m),
+            Split::RStar => rstar_split(&mut e[..n], m),
+        };
+        let block = if leaf {
+            self.alloc_refs()
+        } else {
+            self.alloc_nodes()
+        }
+        .expect("room checked before the insert");
+        let (mut k1, mut k2) = (0u32, 0u32);
+        let (mut b1, mut b2) = (Aabb::EMPTY, Aabb::EMPTY);
+        for (i, x) in e[..n].iter().enumerate() {
+            if second[i] {
+                self.put(leaf, block + k2, x);
+                k2 += 1;
+                b2 = b2.union(&x.bounds());
+            } else {
+                self.put(leaf, nd.first + k1, x);
+                k1 += 1;
+                b1 = b1.union(&x.bounds());
+            }
+        }
+        let kind = |b: &Aabb, first: u32, k: u32| {
+            if leaf {
+                BvhNode::leaf(b, first, k)
+            } else {
+                BvhNode::interior(b, first, k)
+            }
+        };
+        self.nodes[slot as usize] = kind(&b1, nd.first, k1);
+        kind(&b2, block, k2)
+    }
+
+    /// Removes primitive `prim`; false when the tree does not hold it.
+    /// Nodes left with fewer than m entries are dissolved and their
+    /// objects inserted again (Guttman's CondenseTree, reinserting objects
+    /// rather than whole subtrees); `orphans` is scratch of
+    /// [`RTreeRequirements::scratch`] entries.
+    pub fn delete(&mut self, prim: u32, orphans: &mut [u32]) -> Result<bool, Error> {
+        if orphans.len() < self.len as usize {
+            return Err(Error::SliceTooSmall {
+                slice: "orphans",
+                needed: self.len as usize,
+                got: orphans.len(),
+            });
+        }
+        let Some(pb) = (prim as usize)
+            .lt(&self.scene.prim_count())
+            .then(|| self.scene.prim_bounds(prim as usize))
+            .flatten()
+        else {
+            return Ok(false);
+        };
+        // Depth-first search for the leaf holding it: (slot, next entry).
+        let mut path = [(0u32, 0u32); MAX_HEIGHT + 1];
+        let mut depth = 0usize;
+        let found = loop {
+            let (slot, next) = path[depth];
+            let nd = self.nodes[slot as usize];
+            if nd.is_leaf() {
+                let hit = (0..nd.len()).find(|&i| self.refs[(nd.first + i) as usize] == prim);
+                if let Some(i) = hit {
+                    break Some(i);
+                }
+            } else if next < nd.len() {
+                path[depth].1 += 1;
+                let child = nd.first + next;
+                let cb = self.nodes[child as usize].bounds();
+                if cb.union(&pb) == cb {
+                    depth += 1;
+                    path[depth] = (child, 0);
+                }
+                continue;
+            }
+            if depth == 0 {
+                break None;
+            }
+            depth -= 1;
+        };
+        let Some(i) = found else { return Ok(false) };
+        let leaf = path[depth].0;
+        let nd = self.nodes[leaf as usize];
+        self.refs[(nd.first + i) as usize] = self.refs[(nd.first + nd.len() - 1) as usize];
+        self.nodes[leaf as usize].set_len(nd.len() - 1);
+        self.len -= 1;
+        // CondenseTree: dissolve underfull nodes on the path, bottom up.
+        let mut orphan_count = 0usize;
+        for l in (1..=depth).rev() {
+            let s = path[l].0;
+            if self.nodes[s as usize].len() >= self.params.min_children {
+                self.refit(s);
+                continue;
+            }
+            self.dissolve(s, orphans, &mut orphan_count);
+            let parent = path[l - 1].0;
+            let pn = self.nodes[parent as usize];
+            let last = pn.first + pn.len() - 1;
+            self.nodes[s as usize] = self.nodes[last as usize];
+            self.nodes[parent as usize].set_len(pn.len() - 1);
+        }
+        self.refit(0);
+        // Shorten: a root with one child is replaced by it.
+        while !self.nodes[0].is_leaf() && self.nodes[0].len() <= 1 {
+            let root = self.nodes[0];
+            if root.is_empty() {
+                self.free_block(false, root.first);
+                let b = self
+                    .alloc_refs()
+                    .expect("the dissolved leaves freed their blocks");
+                self.nodes[0] = BvhNode::leaf(&Aabb::EMPTY, b, 0);
+                self.height = 0;
+                break;
+            }
+            self.nodes[0] = self.nodes[root.first as usize];
+            self.free_block(false, root.first);
+            self.height -= 1;
+        }
+        self.len -= orphan_count as u32;
+        for &p in &orphans[..orphan_count] {
+            self.insert(p)?;
+        }
+        Ok(true)
+    }
+
+    /// Frees the subtree in `slot`, collecting its objects into `orphans`.
+    fn dissolve(&mut self, slot: u32, orphans: &mut [u32], n: &mut usize) {
+        let nd = self.nodes[slot as usize];
+        if nd.is_leaf() {
+            for i in 0..nd.len() {
+                orphans[*n] = self.refs[(nd.first + i) as usize];
+                *n += 1;
+            }
+            self.free_block(true, nd.first);
+            return;
+        }
+        // Depth-first over the subtree's blocks: a block is freed only
+        // after its entries are read (freeing overwrites its first slot).
+        let mut stack = [(0u32, 0u32); MAX_HEIGHT * MAX_CHILDREN as usize];
+        stack[0] = (nd.first, nd.len());
+        let mut sp = 1;
+        while sp > 0 {
+            sp -= 1;
+            let (block, len) = stack[sp];
+            for i in 0..len {
+                let c = self.nodes[(block + i) as usize];
+                if c.is_leaf() {
+                    for k in 0..c.len() {
+                        orphans[*n] = self.refs[(c.first + k) as usize];
+                        *n += 1;
+                    }
+                    self.free_block(true, c.first);
+                } else {
+                    stack[sp] = (c.first, c.len());
+                    sp += 1;
+                }
+            }
+            self.free_block(false, block);
+        }
+    }
+}
+
+/// Guttman's quadratic split of `e` (M + 1 entries): true for entries of
+/// the second group. Each group gets at least `m`.
+fn quadratic_split(e: &[Entry], m: usize) -> [bool; MAX_CHILDREN as usize + 1] {
+    let n = e.len();
+    let mut second = [false; MAX_CHILDREN as usize + 1];
+    let mut done = [false; MAX_CHILDREN as usize + 1];
+    // PickSeeds: the pair wasting the most area together.
+    let (mut s1, mut s2, mut worst) = (0, 1, f32::NEG_INFINITY);
+    for i in 0..n {
+        for j in i + 1..n {
+            let (a, b) = (e[i].bounds(), e[j].bounds());
+            let d = a.union(&b).area() - a.area() - b.area();
+            if d > worst {
+                (s1, s2, worst) = (i, j, d);
+            }
+        }
+    }
+    let (mut g1, mut g2) = (e[s1].bounds(), e[s2].bounds());
+    let (mut n1, mut n2) = (1usize, 1usize);
+    done[s1] = true;
+    done[s2] = true;
+    second[s2] = true;
+    let mut left = n - 2;
+    while left > 0 {
+        // One group must take the rest to reach m.
+        if n1 + left == m || n2 + left == m {
+            let to_second = n2 + left == m;
+            for i in 0..n {
+                if !done[i] {
+                    second[i] = to_second;
+                    done[i] = true;
+                }
+            }
+            break;
+        }
+        // PickNext: the entry with the strongest preference.
+        let (mut pick, mut pref) = (usize::MAX, f32::NEG_INFINITY);
+        for i in 0..n {
+            if !done[i] {
+                let b = e[i].bounds();
+                let p = (enlarged(&g1, &b) - enlarged(&g2, &b)).abs();
+                if p > pref {
+                    (pick, pref) = (i, p);
+                }
+            }
+        }
+        let b = e[pick].bounds();
+        let (d1, d2) = (enlarged(&g1, &b), enlarged(&g2, &b));
+        let to_second = (d2, g2.area(), n2) < (d1, g1.area(), n1);
+        done[pick] = true;
+        second[pick] = to_second;
+        if to_second {
+            g2 = g2.union(&b);
+            n2 += 1;
+        } else {
+            g1 = g1.union(&b);
+            n1 += 1;
+        }
+        left -= 1;
+    }
+    second
+}
+
+/// The R* split: the axis with the smallest margin sum over all
+/// distributions of the entries sorted by lower then by upper bound; on
+/// it, the distribution with the least overlap, then the least area.
+/// Reorders `e`; true for entries of the second group.
+fn rstar_split(e: &mut [Entry], m: usize) -> [bool; MAX_CHILDREN as usize + 1] {
+    let n = e.len();
+    let sort = |e: &mut [Entry], axis: usize, upper: bool| {
+        e.sort_unstable_by(|a, b| {
+            let (ka, kb) = if upper {
+                ((a.max[axis], a.min[axis]), (b.max[axis], b.min[axis]))
+            } else {
+                ((a.min[axis], a.max[axis]), (b.min[axis], b.max[axis]))
+            };
+            ka.0.total_cmp(&kb.0)
+                .then(ka.1.total_cmp(&kb.1))
+                .then(a.first.cmp(&b.first))
+        })
+    };
+    // Boxes of the first k and of the rest, for every k.
+    let groups = |e: &[Entry], k: usize| {
+        let mut a = Aabb::EMPTY;
+        let mut b = Aabb::EMPTY;
+        for x in &e[..k] {
+            a = a.union(&x.bounds());
+        }
+        for x in &e[k..] {
+            b = b.union(&x.bounds());
+        }
+        (a, b)
+    };
+    let mut best_axis = (0usize, f32::INFINITY);
+    for axis in 0..3 {
+        let mut s = 0.0;
+        for upper in [false, true] {
+            sort(e, axis, upper);
+            for k in m..=n - m {
+                let (a, b) = groups(e, k);
+                s += margin(&a) + margin(&b);
+            }
+        }
+        if s < best_axis.1 {
+            best_axis = (axis, s);
+        }
+    }
+    let axis = best_axis.0;
+    let mut best = (false, m, f32::INFINITY, f32::INFINITY);
+    for upper in [false, true] {
+        sort(e, axis, upper);
+        for k in m..=n - m {
+            let (a, b) = groups(e, k);
+            let key = (a.intersection(&b).area(), a.area() + b.area());
+            if key < (best.2, best.3) {
+                best = (upper, k, key.0, key.1);
+            }
+        }
+    }
+    sort(e, axis, best.0);
+    let mut second = [false; MAX_CHILDREN as usize + 1];
+    for s in second.iter_mut().take(n).skip(best.1) {
+        *s = true;
+    }
+    second
+}

@@ -1,0 +1,301 @@
+//! Every hierarchy builder against the brute-force oracle; memory bounds;
+//! R-tree insert and delete.
+mod common;
+
+use common::*;
+use coray::bvh::{
+    self, build_nn, build_tdbs, rtree_requirements, Builder, Bvh, BvhNode, BvhScratch,
+    BvhStackItem, BvhStats, BvhStorage, InsertOrder, RTree, RTreeParams, Split,
+};
+use coray::{oracle, Aabb, Error, Hit, Ray, Scene};
+
+/// Storage for a static build, sized by `requirements` minus `less` nodes.
+struct Static {
+    nodes: Vec<BvhNode>,
+    refs: Vec<u32>,
+    boxes: Vec<Aabb>,
+    keys: Vec<f32>,
+    links: Vec<u32>,
+    clusters: Vec<BvhNode>,
+}
+
+impl Static {
+    fn new(n: usize, b: Builder, less: usize) -> Static {
+        let r = bvh::requirements(n, b);
+        Static {
+            nodes: vec![BvhNode::default(); r.nodes - less],
+            refs: vec![0; r.refs],
+            boxes: vec![Aabb::EMPTY; r.boxes],
+            keys: vec![0.0; r.keys],
+            links: vec![0; r.links],
+            clusters: vec![BvhNode::default(); r.clusters],
+        }
+    }
+    fn build<'a>(&'a mut self, scene: &Scene<'a>, b: Builder) -> Result<Bvh<'a>, Error> {
+        let storage = BvhStorage {
+            nodes: &mut self.nodes,
+            refs: &mut self.refs,
+        };
+        let scratch = BvhScratch {
+            boxes: &mut self.boxes,
+            keys: &mut self.keys,
+            links: &mut self.links,
+            clusters: &mut self.clusters,
+        };
+        match b {
+            Builder::Nn => build_nn(scene, storage, scratch),
+            _ => build_tdbs(scene, b, 1, storage, scratch),
+        }
+    }
+}
+
+fn same(a: &Hit, b: &Hit) -> bool {
+    a.is_hit() == b.is_hit() && (!a.is_hit() || a.t == b.t)
+}
+
+/// Closest and any hit of `bvh` against `want` (closest) for every ray;
+/// returns the hits seen.
+fn check(bvh: &Bvh, rays: &[Ray], what: &str, want: impl Fn(&Ray) -> (Hit, bool)) -> usize {
+    let mut stack = vec![BvhStackItem::default(); bvh.stack_len()];
+    let mut hits = 0;
+    for (i, r) in rays.iter().enumerate() {
+        let (w, w_any) = want(r);
+        let mut st = BvhStats::default();
+        let got = bvh.intersect(r, &mut stack, &mut st);
+        assert!(
+            same(&got, &w),
+            "{what}: ray {i} {r:?}: got {got:?}, want {w:?}"
+        );
+        assert_eq!(
+            bvh.occluded(r, &mut stack, &mut st),
+            w_any,
+            "{what}: ray {i} occluded"
+        );
+        assert_eq!(st.trace.rays, 2);
+        if bvh.info.ref_count > 0 {
+            assert!(st.box_tests >= 2 && st.box_cost >= 2 * st.box_tests);
+        }
+        hits += w.is_hit() as usize;
+    }
+    hits
+}
+
+fn oracle_of<'a>(scene: &'a Scene<'a>) -> impl Fn(&Ray) -> (Hit, bool) + 'a {
+    move |r| (oracle::intersect(scene, r), oracle::occluded(scene, r))
+}
+
+const STATIC: [Builder; 3] = [Builder::Tdbs, Builder::TdbsSah, Builder::Nn];
+
+fn rtree_params() -> Vec<(String, RTreeParams)> {
+    let mut v = Vec::new();
+    for split in [Split::Quadratic, Split::RStar] {
+        for order in [
+            InsertOrder::Scene,
+            InsertOrder::Shuffled(7),
+            InsertOrder::Sorted,
+        ] {
+            for (big, small) in [(4, 2), (8, 3), (32, 12)] {
+                v.push((
+                    format!("{split:?}/{order:?}/M{big}m{small}"),
+                    RTreeParams {
+                        split,
+                        max_children: big,
+                        min_children: small,
+                        order,
+                    },
+                ));
+            }
+        }
+    }
+    v
+}
+
+fn build_rtree<'a>(
+    scene: &Scene<'a>,
+    p: RTreeParams,
+    nodes: &'a mut Vec<BvhNode>,
+    refs: &'a mut Vec<u32>,
+) -> RTree<'a> {
+    let req = rtree_requirements(scene.prim_count(), &p);
+    nodes.resize(req.nodes, BvhNode::default());
+    refs.resize(req.refs, 0);
+    let mut order = vec![0u32; req.scratch];
+    RTree::build(scene, p, nodes, refs, &mut order).expect("room from rtree_requirements")
+}
+
+#[test]
+fn every_builder_matches_the_oracle() {
+    let mut rng = Rng(11);
+    let o = random_scene(&mut rng, 900, 200, 200, 10.0);
+    let scene = o.scene();
+    let rays = random_rays(&mut rng, 1500, 10.0);
+    let n = scene.prim_count();
+    for b in STATIC {
+        let mut s = Static::new(n, b, 0);
+        let bvh = s.build(&scene, b).unwrap();
+        let v = bvh.validate(None).unwrap();
+        assert_eq!(v.refs as usize, n, "{b:?}");
+        assert_eq!(v.leaves as usize, n, "{b:?}: one object per leaf");
+        assert_eq!(bvh.info.node_count as usize, 2 * n - 1, "{b:?}");
+        let hits = check(&bvh, &rays, &format!("{b:?}"), oracle_of(&scene));
+        assert!(hits > 300, "{b:?}: {hits} hits");
+    }
+    for (name, p) in rtree_params() {
+        let (mut nodes, mut refs) = (Vec::new(), Vec::new());
+        let t = build_rtree(&scene, p, &mut nodes, &mut refs);
+        assert_eq!(t.len() as usize, n);
+        let bvh = t.bvh();
+        let v = bvh.validate(Some(p.min_children)).unwrap();
+        assert_eq!(v.refs as usize, n, "{name}");
+        check(&bvh, &rays, &name, oracle_of(&scene));
+    }
+}
+
+#[test]
+fn empty_single_and_degenerate_scenes() {
+    let mut o = OwnedScene::default();
+    // Degenerate only: nothing enters the hierarchy.
+    o.add_triangle(coray::Vec3::ZERO, coray::Vec3::ZERO, coray::Vec3::X);
+    let scene = o.scene();
+    let rays = random_rays(&mut Rng(3), 50, 2.0);
+    for b in STATIC {
+        let mut s = Static::new(scene.prim_count(), b, 0);
+        let bvh = s.build(&scene, b).unwrap();
+        assert_eq!(bvh.info.ref_count, 0);
+        bvh.validate(None).unwrap();
+        check(&bvh, &rays, "degenerate", oracle_of(&scene));
+    }
+    o.add_triangle(
+        coray::Vec3::new(-1.0, -1.0, 0.0),
+        coray::Vec3::new(1.0, -1.0, 0.0),
+        coray::Vec3::new(0.0, 1.0, 0.0),
+    );
+    let scene = o.scene();
+    for b in STATIC {
+        let mut s = Static::new(scene.prim_count(), b, 0);
+        let bvh = s.build(&scene, b).unwrap();
+        assert_eq!((bvh.info.ref_count, bvh.info.depth), (1, 0));
+        check(&bvh, &rays, "single", oracle_of(&scene));
+    }
+    for (name, p) in rtree_params() {
+        let (mut nodes, mut refs) = (Vec::new(), Vec::new());
+        let t = build_rtree(&scene, p, &mut nodes, &mut refs);
+        assert_eq!(t.len(), 1, "{name}");
+        check(&t.bvh(), &rays, &name, oracle_of(&scene));
+    }
+}
+
+/// Static builds: exactly `requirements` succeeds, one node less fails
+/// with the slice and count needed.
+#[test]
+fn exact_fit_and_one_less() {
+    let mut rng = Rng(5);
+    for n in [1usize, 2, 3, 7, 200] {
+        let o = random_scene(&mut rng, n, 0, 0, 5.0);
+        let scene = o.scene();
+        for b in STATIC {
+            let need = bvh::requirements(n, b).nodes;
+            let mut s = Static::new(n, b, 0);
+            let bvh = s.build(&scene, b).unwrap();
+            assert_eq!(bvh.info.node_count as usize, need, "{b:?} n={n}");
+            let mut s = Static::new(n, b, 1);
+            match s.build(&scene, b) {
+                Err(Error::SliceTooSmall { slice, needed, got }) => {
+                    assert_eq!((slice, needed, got), ("nodes", need, need - 1));
+                }
+                other => panic!("{b:?} n={n}: {:?}", other.map(|t| t.info)),
+            }
+        }
+    }
+}
+
+/// Inserting into a full R-tree returns a capacity status and leaves a
+/// valid tree holding everything inserted before.
+#[test]
+fn rtree_insert_into_a_full_arena() {
+    let mut rng = Rng(9);
+    let o = random_scene(&mut rng, 600, 0, 0, 5.0);
+    let scene = o.scene();
+    for p in [RTreeParams::rtree(), RTreeParams::rstar()] {
+        let req = rtree_requirements(100, &p);
+        let mut nodes = vec![BvhNode::default(); req.nodes];
+        let mut refs = vec![0u32; req.refs];
+        let mut t = RTree::new(&scene, p, &mut nodes, &mut refs).unwrap();
+        let mut inserted = 0;
+        let err = loop {
+            match t.insert(inserted) {
+                Ok(()) => inserted += 1,
+                Err(e) => break e,
+            }
+            assert!(inserted < 600, "{p:?}: never full");
+        };
+        assert!(matches!(err, Error::SliceTooSmall { .. }), "{err:?}");
+        assert!(
+            inserted >= 100,
+            "{p:?}: full after {inserted} of the 100 it was sized for"
+        );
+        assert_eq!(t.len(), inserted);
+        let bvh = t.bvh();
+        bvh.validate(Some(p.min_children)).unwrap();
+        // It holds exactly the first `inserted` triangles.
+        let rays = random_rays(&mut rng, 400, 5.0);
+        check(&bvh, &rays, "full", |r| brute(&scene, r, |q| q < inserted));
+    }
+}
+
+/// Brute force over the primitives `keep` selects.
+fn brute(scene: &Scene, r: &Ray, keep: impl Fn(u32) -> bool) -> (Hit, bool) {
+    let pr = coray::geom::PreparedRay::new(r);
+    let mut best = Hit::MISS;
+    for p in 0..scene.prim_count() as u32 {
+        if keep(p) {
+            let limit = if best.is_hit() { best.t } else { r.t_max };
+            if let Some(h) = scene.intersect_prim(p as usize, &pr, limit) {
+                best = h;
+            }
+        }
+    }
+    (best, best.is_hit())
+}
+
+/// Deleting objects (with CondenseTree) keeps a valid tree that finds
+/// exactly the objects left; deleting an absent object reports false.
+#[test]
+fn rtree_delete_and_reinsert() {
+    let mut rng = Rng(21);
+    let o = random_scene(&mut rng, 500, 100, 0, 5.0);
+    let scene = o.scene();
+    let n = scene.prim_count() as u32;
+    let rays = random_rays(&mut rng, 300, 5.0);
+    for p in [RTreeParams::rtree(), RTreeParams::rstar()] {
+        let (mut nodes, mut refs) = (Vec::new(), Vec::new());
+        let mut t = build_rtree(&scene, p, &mut nodes, &mut refs);
+        let mut orphans = vec![0u32; n as usize];
+        let mut gone = vec![false; n as usize];
+        for round in 0..4 {
+            for _ in 0..120 {
+                let q = rng.below(n as usize) as u32;
+                let was = t.delete(q, &mut orphans).unwrap();
+                assert_eq!(was, !gone[q as usize], "{p:?}: delete {q}");
+                gone[q as usize] = true;
+            }
+            let left = gone.iter().filter(|g| !**g).count() as u32;
+            assert_eq!(t.len(), left);
+            let bvh = t.bvh();
+            bvh.validate(Some(p.min_children)).unwrap();
+            check(&bvh, &rays, &format!("{p:?} round {round}"), |r| {
+                brute(&scene, r, |q| !gone[q as usize])
+            });
+        }
+        // Everything out, then back in.
+        for q in 0..n {
+            t.delete(q, &mut orphans).unwrap();
+        }
+        assert!(t.is_empty());
+        t.bvh().validate(Some(p.min_children)).unwrap();
+        for q in 0..n {
+            t.insert(q).unwrap();
+        }
+        check(&t.bvh(), &rays, "reinserted", oracle_of(&scene));
+    }
+}
