@@ -31,6 +31,10 @@ pub struct Row {
     pub truncated: bool,
     /// LCTS schemes: share of windows whose common sequence holds a leaf.
     pub gamma: Option<f64>,
+    /// Hierarchies: the thesis' cost per hierarchy object and per actual
+    /// object (primary and shadow rays), and the trace time of both.
+    pub cost_per_box: Option<f64>,
+    pub cost_per_prim: Option<f64>,
 }
 
 impl Row {
@@ -155,6 +159,7 @@ pub fn run_kd(
             mismatches: 0,
             truncated: owned.info.truncated(),
             gamma: None,
+            ..Row::default()
         },
         hits,
         shadowed,
@@ -188,9 +193,61 @@ pub fn run_embree(s: &SceneData, primary: &[Ray], shadow: &[Ray], repeat: usize)
     }
 }
 
+/// Builds hierarchy `method` and traces the workload through it.
+pub fn run_bvh(
+    s: &SceneData,
+    method: &str,
+    primary: &[Ray],
+    shadow: &[Ray],
+    repeat: usize,
+) -> Result<Traced, String> {
+    use coray::bvh::{BvhStackItem, BvhStats};
+    let owned = crate::bvhbuild::OwnedBvh::build(&s.mesh.scene(), method)?;
+    let bvh = owned.bvh(s.mesh.scene());
+    let mut stack = vec![BvhStackItem::default(); bvh.stack_len()];
+    let mut prim_stats = BvhStats::default();
+    let (primary_s, hits) = best_of(repeat, || {
+        prim_stats = BvhStats::default();
+        primary
+            .iter()
+            .map(|r| bvh.intersect(r, &mut stack, &mut prim_stats))
+            .collect::<Vec<_>>()
+    });
+    let mut shadow_stats = BvhStats::default();
+    let (shadow_s, shadowed) = best_of(repeat, || {
+        shadow_stats = BvhStats::default();
+        shadow
+            .iter()
+            .map(|r| bvh.occluded(r, &mut stack, &mut shadow_stats))
+            .collect::<Vec<_>>()
+    });
+    let mut all = prim_stats;
+    all.add(&shadow_stats);
+    let n = primary.len().max(1) as f64;
+    Ok(Traced {
+        row: Row {
+            method: method.to_string(),
+            build_ms: owned.build_ms,
+            arena_bytes: Some(owned.bytes()),
+            primary_s,
+            shadow_s,
+            primary_rays: primary.len(),
+            shadow_rays: shadow.len(),
+            tspr: Some(prim_stats.trace.traversal_steps as f64 / n),
+            isect_per_ray: Some(prim_stats.trace.prim_tests as f64 / n),
+            cost_per_box: Some(all.cost_per_box()),
+            cost_per_prim: Some(all.cost_per_prim()),
+            ..Row::default()
+        },
+        hits,
+        shadowed,
+    })
+}
+
 /// Every method coray has (and Embree when built with it).
 pub fn all_methods() -> Vec<&'static str> {
     let mut m = vec!["kd", "kd-rope", "slcts1d", "slcts2d", "hlcts1d", "hlcts2d"];
+    m.extend(crate::bvhbuild::METHODS);
     if cfg!(feature = "embree") {
         m.push("embree");
     }
@@ -257,6 +314,7 @@ pub fn bench(
             ),
             #[cfg(feature = "embree")]
             "embree" => run_embree(s, &primary, &shadow, repeat),
+            b if crate::bvhbuild::METHODS.contains(&b) => run_bvh(s, b, &primary, &shadow, repeat)?,
             _ => unreachable!("checked above"),
         };
         let mut row = traced.row;
@@ -339,6 +397,7 @@ pub fn run_lcts(
             mismatches,
             truncated: owned.info.truncated(),
             gamma: Some(cs.gamma()),
+            ..Row::default()
         },
         hits: Vec::new(),
         shadowed: Vec::new(),
@@ -450,7 +509,7 @@ pub fn to_json(s: &SceneData, rows: &[Row]) -> String {
             let eta = kd.map(|k| r.primary_s / k.primary_s);
             format!(
                 "{{\"method\": \"{}\", \"build_ms\": {}, \"arena_bytes\": {}, \"primary_mrays\": {}, \"shadow_mrays\": {}, \
-                 \"tspr\": {}, \"isect_per_ray\": {}, \"alpha\": {}, \"eta\": {}, \"mismatches\": {}, \"truncated\": {}, \"gamma\": {}}}",
+                 \"tspr\": {}, \"isect_per_ray\": {}, \"alpha\": {}, \"eta\": {}, \"mismatches\": {}, \"truncated\": {}, \"gamma\": {}, \"cost_per_box\": {}, \"cost_per_prim\": {}}}",
                 r.method,
                 json_num(Some(r.build_ms)),
                 r.arena_bytes.map_or("null".into(), |b| b.to_string()),
@@ -462,7 +521,9 @@ pub fn to_json(s: &SceneData, rows: &[Row]) -> String {
                 json_num(eta),
                 r.mismatches,
                 r.truncated,
-                json_num(r.gamma)
+                json_num(r.gamma),
+                json_num(r.cost_per_box),
+                json_num(r.cost_per_prim)
             )
         })
         .collect();
@@ -475,4 +536,41 @@ pub fn to_json(s: &SceneData, rows: &[Row]) -> String {
         s.mesh.camera.height,
         items.join(", ")
     )
+}
+
+/// `--table bvh`: the thesis' metrics per hierarchy builder (6.3.1):
+/// preprocessing time, ray-tracing time (primary and shadow rays), objects
+/// tested per primary ray, cost per hierarchy object and per actual object.
+pub fn print_bvh_table(s: &SceneData, rows: &[Row]) {
+    println!(
+        "scene {}: {} objects, {}x{} primary rays, {} shadow rays, 1 thread; costs in the thesis' units",
+        s.name,
+        s.mesh.counts.objects(),
+        s.mesh.camera.width,
+        s.mesh.camera.height,
+        rows.first().map_or(0, |r| r.shadow_rays)
+    );
+    println!(
+        "{:<9} {:>12} {:>12} {:>14} {:>13} {:>13} {:>9}",
+        "builder",
+        "preproc ms",
+        "trace s",
+        "objects/prim",
+        "cost/hier obj",
+        "cost/act obj",
+        "mismatch"
+    );
+    for r in rows {
+        let opt = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{x:.2}"));
+        println!(
+            "{:<9} {:>12.1} {:>12.3} {:>14} {:>13} {:>13} {:>9}",
+            r.method,
+            r.build_ms,
+            r.primary_s + r.shadow_s,
+            opt(r.isect_per_ray),
+            opt(r.cost_per_box),
+            opt(r.cost_per_prim),
+            r.mismatches
+        );
+    }
 }

@@ -4,6 +4,7 @@
 //! default scene (spd:balls) to coray.png.
 
 mod bench;
+mod bvhbuild;
 #[cfg(feature = "embree")]
 mod compare;
 mod kdbuild;
@@ -74,7 +75,8 @@ enum Command {
         /// Print one JSON object instead of a table.
         #[arg(long)]
         json: bool,
-        /// A paper's table instead of the method table: `lcts` (Havran and
+        /// A paper's table instead of the method table: `bvh` (the thesis'
+        /// hierarchy metrics per builder, 6.3.1), `lcts` (Havran and
         /// Bittner's Table 2: SCENE may be a comma-separated list, or `spd:all`
         /// for the eight SPD scenes) or `lcts-res` (Table 3: SCENE, default
         /// spd:teapot, at 256 to --max-res pixels square).
@@ -270,6 +272,18 @@ fn paper_table(
 ) -> Result<(), String> {
     let mut cols = Vec::new();
     let kind = match table {
+        "bvh" => {
+            let s = load_square(scene, res, opts)?;
+            let mut methods = vec!["kd".to_string()];
+            methods.extend(bvhbuild::METHODS.iter().map(|m| m.to_string()));
+            let rows = bench::bench(&s, &methods, params, repeat, true)?;
+            if json {
+                println!("{}", bench::to_json(&s, &rows));
+            } else {
+                bench::print_bvh_table(&s, &rows);
+            }
+            return Ok(());
+        }
         "lcts" => {
             let scenes: Vec<String> = if scene == "spd:all" {
                 tables::SPD_SCENES
@@ -299,7 +313,7 @@ fn paper_table(
             }
             tables::Table::Resolutions
         }
-        t => return Err(format!("unknown --table `{t}` (lcts, lcts-res)")),
+        t => return Err(format!("unknown --table `{t}` (lcts, lcts-res, bvh)")),
     };
     if cols.is_empty() {
         return Err(format!(

@@ -231,3 +231,35 @@ fn bench_paper_tables() {
     assert_eq!(code, 2);
     assert!(err.contains("unknown --table `nope`"), "{err}");
 }
+
+/// `--table bvh`: every hierarchy builder traced exactly (0 mismatches
+/// against the kd-tree on primary and shadow rays), with the thesis' costs.
+#[test]
+fn bench_bvh_table() {
+    let d = tmp("bvh");
+    let (code, out, err) = coray(
+        &[
+            "bench",
+            "spd:tree:4",
+            "--res",
+            "48",
+            "--repeat",
+            "1",
+            "--table",
+            "bvh",
+        ],
+        &d,
+    );
+    assert_eq!(code, 0, "{err}");
+    for m in ["tdbs", "tdbs-sah", "nn", "rtree", "rstar"] {
+        let line = out
+            .lines()
+            .find(|l| l.split_whitespace().next() == Some(m))
+            .unwrap_or_else(|| panic!("{m}: {out}"));
+        let cells: Vec<&str> = line.split_whitespace().collect();
+        assert_eq!(cells.len(), 7, "{line}");
+        assert_eq!(cells[6], "0", "{m} mismatches: {line}");
+        let cost_box: f64 = cells[4].parse().unwrap();
+        assert!((2.0..=51.0).contains(&cost_box), "{line}");
+    }
+}
