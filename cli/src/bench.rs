@@ -426,12 +426,10 @@ pub fn reference(rows: &[Row]) -> Option<&Row> {
     rows.iter().find(|r| r.method == "kd")
 }
 
-/// Prints the rows as a table.
-pub fn print_table(s: &SceneData, rows: &[Row]) {
-    let kd = reference(rows);
-    let embree = rows.iter().find(|r| r.method == "embree");
+/// The line above a table: the scene and the rays traced.
+fn print_workload(s: &SceneData, rows: &[Row], note: &str) {
     println!(
-        "scene {}: {} objects ({} primitives), {}x{} primary rays, {} shadow rays, 1 thread",
+        "scene {}: {} objects ({} primitives), {}x{} primary rays, {} shadow rays, 1 thread{note}",
         s.name,
         s.mesh.counts.objects(),
         s.prim_count(),
@@ -439,6 +437,13 @@ pub fn print_table(s: &SceneData, rows: &[Row]) {
         s.mesh.camera.height,
         rows.first().map_or(0, |r| r.shadow_rays)
     );
+}
+
+/// Prints the rows as a table.
+pub fn print_table(s: &SceneData, rows: &[Row]) {
+    let kd = reference(rows);
+    let embree = rows.iter().find(|r| r.method == "embree");
+    print_workload(s, rows, "");
     println!(
         "{:<10} {:>9} {:>11} {:>7} {:>9} {:>9} {:>7} {:>8} {:>6} {:>6} {:>9} {:>9} {:>5}",
         "method",
@@ -542,14 +547,7 @@ pub fn to_json(s: &SceneData, rows: &[Row]) -> String {
 /// preprocessing time, ray-tracing time (primary and shadow rays), objects
 /// tested per primary ray, cost per hierarchy object and per actual object.
 pub fn print_bvh_table(s: &SceneData, rows: &[Row]) {
-    println!(
-        "scene {}: {} objects, {}x{} primary rays, {} shadow rays, 1 thread; costs in the thesis' units",
-        s.name,
-        s.mesh.counts.objects(),
-        s.mesh.camera.width,
-        s.mesh.camera.height,
-        rows.first().map_or(0, |r| r.shadow_rays)
-    );
+    print_workload(s, rows, "; costs in the thesis' units");
     println!(
         "{:<9} {:>12} {:>12} {:>14} {:>13} {:>13} {:>9}",
         "builder",

@@ -8,7 +8,7 @@
 //! again: the same tree as the thesis' quadratic search, in O(n^2) time
 //! with O(n) work per join only for the clusters that lost their partner.
 
-use super::{check_storage, gather, requirements, Builder, Bvh, BvhInfo, BvhNode};
+use super::{binary, check_storage, gather, requirements, Builder, Bvh, BvhNode};
 use super::{BvhScratch, BvhStorage};
 use crate::geom::{Aabb, Scene};
 use crate::Error;
@@ -84,7 +84,6 @@ pub fn build_nn<'a>(
             }
         }
     }
-    let leaf_count = n as u32;
     nodes[0] = if n == 0 {
         BvhNode::leaf(&Aabb::EMPTY, 0, 0)
     } else {
@@ -105,18 +104,5 @@ pub fn build_nn<'a>(
             }
         }
     }
-    let (nodes, refs): (&'a [BvhNode], &'a [u32]) = (nodes, refs);
-    Ok(Bvh {
-        scene: *scene,
-        nodes,
-        refs,
-        info: BvhInfo {
-            root: 0,
-            node_count: top as u32,
-            leaf_count,
-            ref_count: n as u32,
-            depth,
-            max_children: 2,
-        },
-    })
+    Ok(binary(scene, nodes, refs, top, n, depth))
 }

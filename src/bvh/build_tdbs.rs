@@ -7,7 +7,7 @@
 //! of references until its turn, and its two children are appended at the
 //! end, so the build needs no stack and the root is node 0.
 
-use super::{check_storage, gather, requirements, Builder, Bvh, BvhInfo, BvhNode};
+use super::{binary, check_storage, gather, requirements, Builder, Bvh, BvhNode};
 use super::{BvhScratch, BvhStorage};
 use crate::geom::{Aabb, Scene};
 use crate::Error;
@@ -68,13 +68,12 @@ pub fn build_tdbs<'a>(
     if let Some(l) = level.first_mut() {
         *l = 0;
     }
-    let (mut top, mut i, mut leaves, mut depth) = (1usize, 0usize, 0u32, 0u32);
+    let (mut top, mut i, mut depth) = (1usize, 0usize, 0u32);
     while i < top {
         let nd = nodes[i];
         let (first, count) = (nd.first as usize, nd.len() as usize);
         let d = level.get(pair(i)).copied().unwrap_or(0);
         if count <= leaf_size as usize {
-            leaves += 1;
             depth = depth.max(d);
             i += 1;
             continue;
@@ -120,18 +119,5 @@ pub fn build_tdbs<'a>(
         top += 2;
         i += 1;
     }
-    let (nodes, refs): (&'a [BvhNode], &'a [u32]) = (nodes, refs);
-    Ok(Bvh {
-        scene: *scene,
-        nodes,
-        refs,
-        info: BvhInfo {
-            root: 0,
-            node_count: top as u32,
-            leaf_count: leaves,
-            ref_count: n as u32,
-            depth,
-            max_children: 2,
-        },
-    })
+    Ok(binary(scene, nodes, refs, top, n, depth))
 }

@@ -134,6 +134,31 @@ impl Bvh<'_> {
     }
 }
 
+/// A binary hierarchy rooted at node 0 over `nodes[..node_count]`: every
+/// node is a leaf or has two children, so half of them (rounded up) are leaves.
+pub(crate) fn binary<'a>(
+    scene: &Scene<'a>,
+    nodes: &'a [BvhNode],
+    refs: &'a [u32],
+    node_count: usize,
+    ref_count: usize,
+    depth: u32,
+) -> Bvh<'a> {
+    Bvh {
+        scene: *scene,
+        nodes,
+        refs,
+        info: BvhInfo {
+            root: 0,
+            node_count: node_count as u32,
+            leaf_count: node_count.div_ceil(2) as u32,
+            ref_count: ref_count as u32,
+            depth,
+            max_children: 2,
+        },
+    }
+}
+
 pub(crate) fn check_storage(
     req: &BvhRequirements,
     s: &BvhStorage,

@@ -127,8 +127,12 @@ pub struct RTree<'a> {
     height: u32,
     node_blocks: u32,
     ref_blocks: u32,
+    /// Heads of the free lists (a freed block's first slot links on).
     free_nodes: u32,
     free_refs: u32,
+    /// Blocks on each free list.
+    free_node_blocks: u32,
+    free_ref_blocks: u32,
     len: u32,
 }
 
@@ -195,6 +199,8 @@ impl<'a> RTree<'a> {
             ref_blocks: 0,
             free_nodes: NONE,
             free_refs: NONE,
+            free_node_blocks: 0,
+            free_ref_blocks: 0,
             len: 0,
         };
         let b = t.alloc_refs().expect("checked above");
@@ -277,7 +283,7 @@ impl<'a> RTree<'a> {
             info: BvhInfo {
                 root: 0,
                 node_count: self.live_nodes(),
-                leaf_count: self.ref_blocks - self.free_count(self.free_refs, false),
+                leaf_count: self.ref_blocks - self.free_ref_blocks,
                 ref_count: self.len,
                 depth: self.height,
                 max_children: big,
@@ -308,24 +314,12 @@ impl<'a> RTree<'a> {
         n
     }
 
-    fn free_count(&self, mut head: u32, nodes: bool) -> u32 {
-        let mut n = 0;
-        while head != NONE {
-            n += 1;
-            head = if nodes {
-                self.nodes[head as usize].first
-            } else {
-                self.refs[head as usize]
-            };
-        }
-        n
-    }
-
     fn alloc_nodes(&mut self) -> Option<u32> {
         let big = self.params.max_children as usize;
         if self.free_nodes != NONE {
             let b = self.free_nodes;
             self.free_nodes = self.nodes[b as usize].first;
+            self.free_node_blocks -= 1;
             return Some(b);
         }
         let start = 1 + self.node_blocks as usize * big;
@@ -341,6 +335,7 @@ impl<'a> RTree<'a> {
         if self.free_refs != NONE {
             let b = self.free_refs;
             self.free_refs = self.refs[b as usize];
+            self.free_ref_blocks -= 1;
             return Some(b);
         }
         let start = self.ref_blocks as usize * big;
@@ -355,19 +350,20 @@ impl<'a> RTree<'a> {
         if leaf {
             self.refs[b as usize] = self.free_refs;
             self.free_refs = b;
+            self.free_ref_blocks += 1;
         } else {
             self.nodes[b as usize].first = self.free_nodes;
             self.free_nodes = b;
+            self.free_node_blocks += 1;
         }
     }
 
     /// Blocks still obtainable: free lists plus untouched room.
     fn room(&self) -> (usize, usize) {
         let big = self.params.max_children as usize;
-        let nodes = self.free_count(self.free_nodes, true) as usize + (self.nodes.len() - 1) / big
+        let nodes = self.free_node_blocks as usize + (self.nodes.len() - 1) / big
             - self.node_blocks as usize;
-        let refs = self.free_count(self.free_refs, false) as usize + self.refs.len() / big
-            - self.ref_blocks as usize;
+        let refs = self.free_ref_blocks as usize + self.refs.len() / big - self.ref_blocks as usize;
         (nodes, refs)
     }
 

@@ -114,17 +114,25 @@ impl Bvh<'_> {
     fn test_prim(&self, p: u32, r: &PreparedRay, t_max: f32, st: &mut BvhStats) -> Option<Hit> {
         st.trace.prim_tests += 1;
         let h = self.scene.intersect_prim(p as usize, r, t_max);
-        let (geom, away) = match self.scene.geom_of(p as usize) {
-            GEOM_SPHERES => {
-                let s = &self.scene.spheres[p as usize - self.scene.triangles.len()];
-                let oc = r.origin - crate::Vec3::from(s.center);
-                let outside = oc.length_squared() > s.radius * s.radius;
-                (GEOM_SPHERES, outside && oc.dot(r.dir) > 0.0)
-            }
-            g => (g, false),
+        let geom = self.scene.geom_of(p as usize);
+        // Only a sphere's miss cost depends on more than the outcome.
+        let away = geom == GEOM_SPHERES && h.is_none() && {
+            let s = &self.scene.spheres[p as usize - self.scene.triangles.len()];
+            let oc = r.origin - crate::Vec3::from(s.center);
+            oc.length_squared() > s.radius * s.radius && oc.dot(r.dir) > 0.0
         };
         st.prim_cost += prim_cost(geom, h.is_some(), away);
         h
+    }
+
+    /// The root's stack entry when the ray enters its box.
+    #[inline]
+    fn enter_root(&self, r: &PreparedRay, st: &mut BvhStats) -> Option<BvhStackItem> {
+        let root = self.info.root;
+        let (t, cost) = box_test(&self.nodes[root as usize], r, r.t_max);
+        st.box_tests += 1;
+        st.box_cost += cost;
+        Some(BvhStackItem { node: root, t: t? })
     }
 
     /// Closest hit of `ray`, on the caller's `stack` (at least
@@ -138,12 +146,10 @@ impl Bvh<'_> {
         let r = PreparedRay::new(ray);
         let mut best = Hit::MISS;
         let limit = |best: &Hit| if best.is_hit() { best.t } else { r.t_max };
-        let root = self.info.root;
-        let (t, c) = box_test(&self.nodes[root as usize], &r, r.t_max);
-        st.box_tests += 1;
-        st.box_cost += c;
-        let Some(t) = t else { return best };
-        stack[0] = BvhStackItem { node: root, t };
+        let Some(root) = self.enter_root(&r, st) else {
+            return best;
+        };
+        stack[0] = root;
         let mut sp = 1;
         while sp > 0 {
             sp -= 1;
@@ -190,12 +196,10 @@ impl Bvh<'_> {
             return false;
         }
         let r = PreparedRay::new(ray);
-        let root = self.info.root;
-        let (t, c) = box_test(&self.nodes[root as usize], &r, r.t_max);
-        st.box_tests += 1;
-        st.box_cost += c;
-        let Some(t) = t else { return false };
-        stack[0] = BvhStackItem { node: root, t };
+        let Some(root) = self.enter_root(&r, st) else {
+            return false;
+        };
+        stack[0] = root;
         let mut sp = 1;
         while sp > 0 {
             sp -= 1;

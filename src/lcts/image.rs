@@ -505,33 +505,12 @@ impl<F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, F> {
             }
             let xm = (x0 + x1) / 2;
             let (m, free) = self.split_ray(xm, y0, &cut, free);
-            let entries = cut.as_slice();
-            let Free {
-                records,
-                starts,
-                hlcts,
-            } = free;
-            self.shaft(
-                [x0, y0, xm, y0],
-                &[old(0), m],
-                entries,
-                depth + 1,
-                Free {
-                    records,
-                    starts,
-                    hlcts: &mut *hlcts,
-                },
-            );
-            self.shaft(
-                [xm, y0, x1, y0],
-                &[m, old(1)],
-                entries,
-                depth + 1,
-                Free {
-                    records,
-                    starts,
-                    hlcts,
-                },
+            self.halves(
+                [[x0, y0, xm, y0], [xm, y0, x1, y0]],
+                [&[old(0), m], &[m, old(1)]],
+                cut.as_slice(),
+                depth,
+                free,
             );
             return;
         }
@@ -555,16 +534,28 @@ impl<F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, F> {
         } else {
             ([old(0), old(1), a, b], [a, b, old(2), old(3)])
         };
-        let entries = cut.as_slice();
+        self.halves(halves, [&first, &second], cut.as_slice(), depth, free);
+    }
+
+    /// Casts the two halves of a split rectangle (or interval) under the
+    /// same parent cut; the second reuses the buffers the first freed.
+    fn halves(
+        &mut self,
+        rects: [[u32; 4]; 2],
+        corners: [&[Corner]; 2],
+        parent: &[HlctsEntry],
+        depth: u32,
+        free: Free,
+    ) {
         let Free {
             records,
             starts,
             hlcts,
         } = free;
         self.shaft(
-            halves[0],
-            &first,
-            entries,
+            rects[0],
+            corners[0],
+            parent,
             depth + 1,
             Free {
                 records,
@@ -573,9 +564,9 @@ impl<F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, F> {
             },
         );
         self.shaft(
-            halves[1],
-            &second,
-            entries,
+            rects[1],
+            corners[1],
+            parent,
             depth + 1,
             Free {
                 records,
