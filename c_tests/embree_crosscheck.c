@@ -1,5 +1,5 @@
 /* coray against Embree 3 on the same scenes, ray for ray: closest hits of
- * both kd traversals and any-hit answers. Same hit or miss, same primitive,
+ * both kd traversals and of the five hierarchies, and any-hit answers. Same hit or miss, same primitive,
  * |dt| <= 1e-4 max(1, t). Disagreements that are documented ties (a ray
  * grazing an edge, a silhouette or a rim; two primitives at the same
  * distance) are counted and printed apart. Every other disagreement goes to
@@ -255,19 +255,40 @@ static void compare(const char *what, const TestScene *ts, const CorayRay *rays,
     }
 }
 
+/* Any-hit answers against Embree's (`eocc`), given each ray's closest-hit class. */
+static void compare_occluded(const char *what, const CorayRay *rays, const CorayHit *mine, const CorayHit *theirs,
+                             const uint8_t *occ, const uint8_t *eocc, const unsigned char *cls, size_t n, Tally *tl) {
+    size_t i;
+    for (i = 0; i < n; i++) {
+        tl->occl_compared++;
+        CHECK(occ[i] == (mine[i].geom_id != CORAY_INVALID_ID));
+        if (eocc[i] != occ[i]) {
+            /* Any-hit may differ only where closest hit had a tie or an Embree error. */
+            const CorayHit *h = mine[i].geom_id != CORAY_INVALID_ID ? &mine[i] : &theirs[i];
+            if (cls[i] == TIE_T || cls[i] == TIE_GRAZE || grazing(&rays[i], h)) tl->occl_graze++;
+            else if (cls[i] == EMBREE_WRONG) tl->occl_embree_wrong++;
+            else {
+                tl->occl_disagree++;
+                if (tl->occl_disagree < 20) printf("  %s OCCLUDED DISAGREEMENT ray %zu: coray %d embree %d\n", what, i, occ[i], eocc[i]);
+            }
+        }
+    }
+}
+
 static void check_scene(const char *name, TestScene *ts, RTCDevice dev, int cam_res, size_t n_random, int unit_dirs,
                         Tally *tl) {
     RTCScene sc = embree_scene(dev, ts);
-    uint32_t preset, trav;
+    uint32_t preset, trav, builder;
     size_t n_cam = (size_t)cam_res * (size_t)cam_res, n_total, i, n_surf = 0;
     CorayRay *rays;
     CorayHit *mine, *theirs;
-    uint8_t *occ, *cls;
+    uint8_t *occ, *eocc, *cls;
     float eye[3] = {0.3f, 0.9f, 2.8f};
     rays = malloc(sizeof(CorayRay) * (n_cam * 2 + n_random));
     mine = malloc(sizeof(CorayHit) * (n_cam * 2 + n_random));
     theirs = malloc(sizeof(CorayHit) * (n_cam * 2 + n_random));
     occ = malloc(n_cam * 2 + n_random);
+    eocc = malloc(n_cam * 2 + n_random);
     cls = malloc(n_cam * 2 + n_random);
     rays_camera(rays, cam_res, cam_res, eye);
     rays_random(rays + n_cam, n_random, 1.0f);
@@ -299,7 +320,10 @@ static void check_scene(const char *name, TestScene *ts, RTCDevice dev, int cam_
             rays[i].tnear *= l;
         }
     tl->distinct += (long)n_total;
-    for (i = 0; i < n_total; i++) embree_intersect(sc, &rays[i], &theirs[i]);
+    for (i = 0; i < n_total; i++) {
+        embree_intersect(sc, &rays[i], &theirs[i]);
+        eocc[i] = (uint8_t)embree_occluded(sc, &rays[i]);
+    }
     for (preset = 0; preset < 2; preset++) {
         Tree tree = tree_build(&ts->view, preset);
         for (trav = 0; trav < 2; trav++) {
@@ -309,36 +333,46 @@ static void check_scene(const char *name, TestScene *ts, RTCDevice dev, int cam_
             CHECK_STATUS(coray_kdtree_intersect(tree.arena, tree.bytes, &ts->view, trav, rays, mine, n_total, NULL), CORAY_STATUS_OK);
             compare(what, ts, rays, mine, theirs, n_total, tl, cls);
             CHECK_STATUS(coray_kdtree_occluded(tree.arena, tree.bytes, &ts->view, trav, rays, occ, n_total, NULL), CORAY_STATUS_OK);
-            for (i = 0; i < n_total; i++) {
-                int e = embree_occluded(sc, &rays[i]);
-                tl->occl_compared++;
-                CHECK(occ[i] == (mine[i].geom_id != CORAY_INVALID_ID));
-                if (e != occ[i]) {
-                    /* Any-hit may differ only where closest hit had a tie or an Embree error. */
-                    const CorayHit *h = mine[i].geom_id != CORAY_INVALID_ID ? &mine[i] : &theirs[i];
-                    if (cls[i] == TIE_T || cls[i] == TIE_GRAZE || grazing(&rays[i], h)) tl->occl_graze++;
-                    else if (cls[i] == EMBREE_WRONG) tl->occl_embree_wrong++;
-                    else {
-                        tl->occl_disagree++;
-                        if (tl->occl_disagree < 20) printf("  %s OCCLUDED DISAGREEMENT ray %zu: coray %d embree %d\n", what, i, occ[i], e);
-                    }
-                }
-            }
+            compare_occluded(what, rays, mine, theirs, occ, eocc, cls, n_total, tl);
         }
         free(tree.arena);
     }
-    printf("%s, %s directions: %zu rays (%zu camera, %zu random, %zu from surfaces) x 4 kd variants\n", name,
+    for (builder = CORAY_BVH_TDBS; builder <= CORAY_BVH_RSTAR; builder++) {
+        static const char *bvh_names[] = {"tdbs", "tdbs-sah", "nn", "rtree", "rstar"};
+        CorayBvhParams p = coray_bvh_params_default(builder);
+        CorayBvhRequirements req;
+        CorayBvhInfo info;
+        void *arena, *scratch, *stack;
+        char what[64];
+        snprintf(what, sizeof what, "%s/%s/%s", name, unit_dirs ? "unit" : "raw", bvh_names[builder]);
+        CHECK_STATUS(coray_bvh_requirements(ts->nt + ts->ns + ts->nc, &p, &req), CORAY_STATUS_OK);
+        arena = arena_alloc(req.bvh_bytes);
+        scratch = arena_alloc(req.scratch_bytes);
+        CHECK_STATUS(coray_bvh_build(&ts->view, &p, arena, req.bvh_bytes, scratch, req.scratch_bytes, NULL), CORAY_STATUS_OK);
+        free(scratch);
+        CHECK_STATUS(coray_bvh_info(arena, req.bvh_bytes, &info), CORAY_STATUS_OK);
+        stack = malloc(info.stack_bytes);
+        CHECK_STATUS(coray_bvh_intersect(arena, req.bvh_bytes, &ts->view, rays, mine, n_total, stack, info.stack_bytes, NULL), CORAY_STATUS_OK);
+        compare(what, ts, rays, mine, theirs, n_total, tl, cls);
+        CHECK_STATUS(coray_bvh_occluded(arena, req.bvh_bytes, &ts->view, rays, occ, n_total, stack, info.stack_bytes, NULL), CORAY_STATUS_OK);
+        compare_occluded(what, rays, mine, theirs, occ, eocc, cls, n_total, tl);
+        free(stack);
+        free(arena);
+    }
+    printf("%s, %s directions: %zu rays (%zu camera, %zu random, %zu from surfaces) x 4 kd variants and 5 hierarchies\n", name,
            unit_dirs ? "unit" : "unnormalised", n_total, n_cam, n_random, n_surf);
     rtcReleaseScene(sc);
     free(rays);
     free(mine);
     free(theirs);
     free(occ);
+    free(eocc);
     free(cls);
 }
 
 static void report(const char *mode, const Tally *tl) {
-    printf("[%s] %ld distinct rays, each traced by coray 4 ways (auto and paper trees, hierarchical and ropes)\n", mode,
+    printf("[%s] %ld distinct rays, each traced by coray 9 ways (auto and paper kd-trees, hierarchical and ropes; "
+           "TDBS, TDBS-SAH, NN, R-tree, R*-tree)\n", mode,
            tl->distinct);
     printf("[%s] closest hit: %ld rays compared, %ld hits, %ld ties at the same distance, %ld grazing ties, %ld disagreements\n",
            mode, tl->compared, tl->hits, tl->ties_same_t, tl->ties_graze, tl->disagreements);

@@ -10,6 +10,30 @@
 #include <stddef.h>
 #include <stdint.h>
 
+// Top-down binary splitting, children of most nearly equal surface area (the thesis' TDBS).
+#define CORAY_BVH_TDBS 0
+
+// Top-down binary splitting by the surface area heuristic.
+#define CORAY_BVH_TDBS_SAH 1
+
+// Bottom-up matching: join the pair with the smallest joint box, repeatedly.
+#define CORAY_BVH_NN 2
+
+// Guttman's R-tree (quadratic split); dynamic.
+#define CORAY_BVH_RTREE 3
+
+// The R*-tree (no forced reinsertion); dynamic.
+#define CORAY_BVH_RSTAR 4
+
+// R-trees insert in scene order.
+#define CORAY_BVH_ORDER_SCENE 0
+
+// R-trees insert in a shuffled order (`seed`).
+#define CORAY_BVH_ORDER_SHUFFLED 1
+
+// R-trees insert in Morton order of the box centres.
+#define CORAY_BVH_ORDER_SORTED 2
+
 // Every pixel by hierarchical traversal (the reference).
 #define CORAY_SCHEME_HIERARCHICAL 0
 
@@ -79,40 +103,37 @@ typedef enum CorayStatus {
   CORAY_STATUS_INTERNAL_ERROR = 9,
 } CorayStatus;
 
-// Parameters of a kd-tree build. Get them from [`coray_kd_params_default`].
-typedef struct CorayKdParams {
-  // `sizeof(CorayKdParams)`.
+// Parameters of a hierarchy build. Get them from [`coray_bvh_params_default`].
+typedef struct CorayBvhParams {
+  // `sizeof(CorayBvhParams)`.
   size_t struct_size;
-  // Deepest leaf; 0 derives it from N as round(8 + 1.3 log2 N). At most 60.
-  uint32_t max_depth;
-  // A node with at most this many primitives becomes a leaf.
+  // `CORAY_BVH_TDBS`, `_TDBS_SAH`, `_NN`, `_RTREE` or `_RSTAR`.
+  uint32_t builder;
+  // TDBS builders: most primitives per leaf (at least 1; the thesis: 1).
+  // Bottom-up matching always makes leaves of 1.
   uint32_t leaf_size;
-  // 1: stop where no split beats the leaf by the SAH; 0: split down to
-  // `leaf_size` or `max_depth`.
-  uint32_t sah_termination;
-  // Ideal references per primitive (1 to 64): sets the ideal arena size.
-  uint32_t refs_per_prim;
-  // SAH cost of a traversal step (> 0; Wald and Havran: 15).
-  float cost_traversal;
-  // SAH cost of a ray-primitive test (> 0; Wald and Havran: 20).
-  float cost_intersection;
-  // Cost factor of a split with an empty side, in (0, 1] (0.8).
-  float empty_bonus;
-} CorayKdParams;
+  // R-trees: M, most entries per node, 4 to 32 (default 8).
+  uint32_t max_children;
+  // R-trees: m, fewest entries per node but the root, 2 to M / 2 (default 3).
+  uint32_t min_children;
+  // R-trees: `CORAY_BVH_ORDER_*`, the order a build inserts the primitives.
+  uint32_t insert_order;
+  // R-trees: 1 to build an empty tree (objects then enter by
+  // [`coray_bvh_insert`]); 0 to insert every primitive.
+  uint32_t start_empty;
+  // R-trees: the shuffle's seed with `CORAY_BVH_ORDER_SHUFFLED`.
+  uint64_t seed;
+} CorayBvhParams;
 
-// Arena sizes for a kd build, from [`coray_kdtree_requirements`].
-typedef struct CorayKdRequirements {
-  // Smallest tree arena a build accepts (the tree is then one leaf).
-  size_t tree_min_bytes;
-  // Tree arena with room for `refs_per_prim` references per primitive
-  // (4 by default): most scenes build without being cut short; one that
-  // needs more stops splitting evenly and says so (`truncated`).
-  size_t tree_bytes;
-  // Smallest scratch arena a build accepts.
-  size_t scratch_min_bytes;
-  // Scratch arena that goes with `tree_bytes`.
+// Arena sizes for a hierarchy, from [`coray_bvh_requirements`].
+typedef struct CorayBvhRequirements {
+  // The hierarchy arena. Static builders need exactly this; an R-tree's
+  // arena of this size holds up to `prim_count` objects, and a larger one
+  // proportionally more.
+  size_t bvh_bytes;
+  // Scratch for a build, and for an R-tree's deletes.
   size_t scratch_bytes;
-} CorayKdRequirements;
+} CorayBvhRequirements;
 
 // The primitives, borrowed for the duration of each call (coray keeps no
 // pointer). A tree stores primitive indices, not copies: pass the same
@@ -143,43 +164,47 @@ typedef struct CorayScene {
   size_t cone_count;
 } CorayScene;
 
-// What a built tree holds (read from its arena header, O(1)).
-typedef struct CorayKdTreeInfo {
-  // Nodes, interior and leaf.
+// What a hierarchy holds (read from its arena header, O(1)).
+typedef struct CorayBvhInfo {
+  // The builder, `CORAY_BVH_*`.
+  uint32_t builder;
+  // Nodes in use, interior and leaf.
   uint32_t node_count;
-  // Leaves.
+  // Leaves in use.
   uint32_t leaf_count;
-  // Primitive references in leaves.
-  uint32_t ref_count;
-  // Depth of the deepest leaf.
+  // Primitives in the hierarchy.
+  uint32_t object_count;
+  // Levels below the root.
   uint32_t depth;
-  // Primitives in the tree (not degenerate).
-  uint32_t valid_prim_count;
-  // 1 when room ran out and the build stopped splitting early.
-  uint32_t truncated;
-  // Bytes of the arena the tree's layout covers.
+  // Most children a node may have (2, or the R-tree's M).
+  uint32_t max_children;
+  // Most objects the hierarchy may hold: for an R-tree, what its arena
+  // holds whatever the order of inserts and deletes (inserts beyond it
+  // get `CORAY_STATUS_ARENA_TOO_SMALL`); static builders: `object_count`.
+  uint32_t capacity;
+  // Bytes of the arena the layout covers.
   size_t arena_bytes_used;
-  // Lower corner of the scene box.
+  // Bytes of traversal stack that [`coray_bvh_intersect`] and
+  // [`coray_bvh_occluded`] need (4-byte aligned). Inserts can deepen an
+  // R-tree: read it again after them.
+  size_t stack_bytes;
+  // Lower corner of the root box (empty hierarchy: +inf).
   float bounds_min[3];
-  // Upper corner of the scene box.
+  // Upper corner of the root box (empty hierarchy: -inf).
   float bounds_max[3];
-} CorayKdTreeInfo;
+} CorayBvhInfo;
 
-// Figures of a validated tree, from [`coray_kdtree_validate`].
-typedef struct CorayKdTreeStats {
-  // Nodes, interior and leaf.
+// Figures of a validated hierarchy, from [`coray_bvh_validate`].
+typedef struct CorayBvhTreeStats {
+  // Nodes reached from the root.
   uint32_t node_count;
-  // Leaves.
+  // Leaves reached.
   uint32_t leaf_count;
-  // Leaves with no primitive.
-  uint32_t empty_leaf_count;
-  // Primitive references.
+  // References in them.
   uint32_t ref_count;
-  // Depth of the deepest leaf.
+  // Deepest leaf.
   uint32_t depth;
-  // SAH cost with the default constants, relative to the root's area.
-  float sah_cost;
-} CorayKdTreeStats;
+} CorayBvhTreeStats;
 
 // A ray segment `org + t * dir`, `t` in `[tnear, tfar]` (Embree's layout of
 // the same fields). `dir` need not be normalised. A NaN or zero direction hits nothing.
@@ -226,6 +251,91 @@ typedef struct CorayTraceStats {
   // Ray-primitive tests.
   uint64_t prim_tests;
 } CorayTraceStats;
+
+// Work done by one hierarchy trace call, in the thesis' terms.
+typedef struct CorayBvhStats {
+  // Rays, nodes visited, primitive tests.
+  struct CorayTraceStats trace;
+  // Hierarchy objects (boxes) tested.
+  uint64_t box_tests;
+  // Their cost in the thesis' units (a box test costs 2 to 51).
+  uint64_t box_cost;
+  // Cost of the actual objects (primitives) tested, in the same units.
+  uint64_t prim_cost;
+} CorayBvhStats;
+
+// Parameters of a kd-tree build. Get them from [`coray_kd_params_default`].
+typedef struct CorayKdParams {
+  // `sizeof(CorayKdParams)`.
+  size_t struct_size;
+  // Deepest leaf; 0 derives it from N as round(8 + 1.3 log2 N). At most 60.
+  uint32_t max_depth;
+  // A node with at most this many primitives becomes a leaf.
+  uint32_t leaf_size;
+  // 1: stop where no split beats the leaf by the SAH; 0: split down to
+  // `leaf_size` or `max_depth`.
+  uint32_t sah_termination;
+  // Ideal references per primitive (1 to 64): sets the ideal arena size.
+  uint32_t refs_per_prim;
+  // SAH cost of a traversal step (> 0; Wald and Havran: 15).
+  float cost_traversal;
+  // SAH cost of a ray-primitive test (> 0; Wald and Havran: 20).
+  float cost_intersection;
+  // Cost factor of a split with an empty side, in (0, 1] (0.8).
+  float empty_bonus;
+} CorayKdParams;
+
+// Arena sizes for a kd build, from [`coray_kdtree_requirements`].
+typedef struct CorayKdRequirements {
+  // Smallest tree arena a build accepts (the tree is then one leaf).
+  size_t tree_min_bytes;
+  // Tree arena with room for `refs_per_prim` references per primitive
+  // (4 by default): most scenes build without being cut short; one that
+  // needs more stops splitting evenly and says so (`truncated`).
+  size_t tree_bytes;
+  // Smallest scratch arena a build accepts.
+  size_t scratch_min_bytes;
+  // Scratch arena that goes with `tree_bytes`.
+  size_t scratch_bytes;
+} CorayKdRequirements;
+
+// What a built tree holds (read from its arena header, O(1)).
+typedef struct CorayKdTreeInfo {
+  // Nodes, interior and leaf.
+  uint32_t node_count;
+  // Leaves.
+  uint32_t leaf_count;
+  // Primitive references in leaves.
+  uint32_t ref_count;
+  // Depth of the deepest leaf.
+  uint32_t depth;
+  // Primitives in the tree (not degenerate).
+  uint32_t valid_prim_count;
+  // 1 when room ran out and the build stopped splitting early.
+  uint32_t truncated;
+  // Bytes of the arena the tree's layout covers.
+  size_t arena_bytes_used;
+  // Lower corner of the scene box.
+  float bounds_min[3];
+  // Upper corner of the scene box.
+  float bounds_max[3];
+} CorayKdTreeInfo;
+
+// Figures of a validated tree, from [`coray_kdtree_validate`].
+typedef struct CorayKdTreeStats {
+  // Nodes, interior and leaf.
+  uint32_t node_count;
+  // Leaves.
+  uint32_t leaf_count;
+  // Leaves with no primitive.
+  uint32_t empty_leaf_count;
+  // Primitive references.
+  uint32_t ref_count;
+  // Depth of the deepest leaf.
+  uint32_t depth;
+  // SAH cost with the default constants, relative to the root's area.
+  float sah_cost;
+} CorayKdTreeStats;
 
 // How an image is cast. Get it from [`coray_cast_params_default`].
 typedef struct CorayCastParams {
@@ -293,6 +403,127 @@ extern "C" {
 // A static, NUL-terminated description of `status` (any integer: unknown
 // values get "unknown status"). Never NULL; never free it.
 const char *coray_status_str(int32_t status);
+
+// Default parameters for `builder` (`CORAY_BVH_*`) with `struct_size`
+// set. An unknown builder gives `struct_size` 0, which every call rejects.
+struct CorayBvhParams coray_bvh_params_default(uint32_t builder);
+
+// Arena sizes for a hierarchy over `prim_count` primitives with `params`
+// (for an R-tree, `prim_count` is the most objects it will hold).
+//
+// # Safety
+// `params` and `out` are NULL or valid pointers to their types.
+enum CorayStatus coray_bvh_requirements(size_t prim_count,
+                                        const struct CorayBvhParams *params,
+                                        struct CorayBvhRequirements *out);
+
+// Builds a hierarchy over `scene` into `bvh_arena`, with `scratch_arena`
+// as scratch (free again when this returns).
+//
+// Both arenas are 16-byte aligned and do not overlap. Static builders need
+// `bvh_bytes` from [`coray_bvh_requirements`]; an R-tree takes any arena
+// from the size for the scene's primitive count up, and uses the rest as
+// room for later inserts. On `CORAY_STATUS_ARENA_TOO_SMALL`,
+// `*needed_bytes` (if not NULL) receives the size the arena that was too
+// small needs. Degenerate primitives stay out of the hierarchy (never hit).
+//
+// # Safety
+// Every pointer is NULL or valid for its documented size; the arenas are
+// not read or written by anyone else during the call.
+enum CorayStatus coray_bvh_build(const struct CorayScene *scene,
+                                 const struct CorayBvhParams *params,
+                                 void *bvh_arena,
+                                 size_t bvh_bytes,
+                                 void *scratch_arena,
+                                 size_t scratch_bytes,
+                                 size_t *needed_bytes);
+
+// What the hierarchy in `bvh_arena` holds, from its header (O(1)).
+//
+// # Safety
+// `bvh_arena` is valid for reads of `bvh_bytes`; `out` is NULL or writable.
+enum CorayStatus coray_bvh_info(const void *bvh_arena, size_t bvh_bytes, struct CorayBvhInfo *out);
+
+// Checks every structural invariant of the hierarchy against `scene`
+// (O(size)): boxes are exact unions, indices in range, counts and depth as
+// recorded; for R-trees also the fill rules and free lists. Run it on an
+// arena loaded from untrusted storage before tracing or changing it.
+// `CORAY_STATUS_CORRUPT_ARENA` when anything is wrong; `out` may be NULL.
+//
+// # Safety
+// As [`coray_bvh_info`]; `scene` is valid.
+enum CorayStatus coray_bvh_validate(const void *bvh_arena,
+                                    size_t bvh_bytes,
+                                    const struct CorayScene *scene,
+                                    struct CorayBvhTreeStats *out);
+
+// Inserts primitive `prim_index` (0-based over triangles, then spheres,
+// then cones) into the R-tree in `bvh_arena`. A degenerate primitive is
+// accepted and not stored. `CORAY_STATUS_ARENA_TOO_SMALL` when the arena
+// holds `CorayBvhInfo.capacity` objects: the tree is then unchanged
+// (build again in a larger arena). `CORAY_STATUS_INVALID_PARAMETER` for a
+// static hierarchy or an index past the scene. Inserting an object that the
+// tree holds already stores it twice.
+//
+// # Safety
+// `bvh_arena` is valid for reads and writes of `bvh_bytes` bytes that
+// nobody else touches during the call; `scene` is valid.
+enum CorayStatus coray_bvh_insert(void *bvh_arena,
+                                  size_t bvh_bytes,
+                                  const struct CorayScene *scene,
+                                  uint32_t prim_index);
+
+// Removes primitive `prim_index` from the R-tree in `bvh_arena`;
+// `*deleted` (if not NULL) receives 1 when it was there, else 0. Nodes left
+// underfull are dissolved and their objects inserted again, which needs
+// `scratch_bytes` from [`coray_bvh_requirements`] in `scratch_arena`
+// (16-byte aligned, not overlapping the tree).
+//
+// # Safety
+// As [`coray_bvh_insert`]; `scratch_arena` is valid for writes of
+// `scratch_bytes`; `deleted` is NULL or writable.
+enum CorayStatus coray_bvh_delete(void *bvh_arena,
+                                  size_t bvh_bytes,
+                                  const struct CorayScene *scene,
+                                  uint32_t prim_index,
+                                  void *scratch_arena,
+                                  size_t scratch_bytes,
+                                  uint8_t *deleted);
+
+// Closest hits of `count` rays: `hits[i]` for `rays[i]`. `stack` is the
+// caller's traversal stack of `stack_bytes` (at least
+// `CorayBvhInfo.stack_bytes`, 4-byte aligned; one per thread). `stats` may
+// be NULL. Many threads may trace one hierarchy at once, each with its
+// own stack, while nobody changes it.
+//
+// # Safety
+// `rays` and `hits` hold `count` elements (may be NULL when `count` is 0);
+// the arena and scene as in [`coray_bvh_validate`]; `stack` is writable
+// for `stack_bytes`.
+enum CorayStatus coray_bvh_intersect(const void *bvh_arena,
+                                     size_t bvh_bytes,
+                                     const struct CorayScene *scene,
+                                     const struct CorayRay *rays,
+                                     struct CorayHit *hits,
+                                     size_t count,
+                                     void *stack_mem,
+                                     size_t stack_bytes,
+                                     struct CorayBvhStats *stats);
+
+// Any-hit queries (shadow rays): `occluded[i]` is 1 when something lies on
+// `rays[i]` within `[tnear, tfar]`, else 0. Otherwise as [`coray_bvh_intersect`].
+//
+// # Safety
+// As [`coray_bvh_intersect`], with `occluded` holding `count` bytes.
+enum CorayStatus coray_bvh_occluded(const void *bvh_arena,
+                                    size_t bvh_bytes,
+                                    const struct CorayScene *scene,
+                                    const struct CorayRay *rays,
+                                    uint8_t *occluded,
+                                    size_t count,
+                                    void *stack_mem,
+                                    size_t stack_bytes,
+                                    struct CorayBvhStats *stats);
 
 // Arena sizes for a tree over `prim_count` primitives with `params`.
 //

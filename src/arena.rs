@@ -240,3 +240,144 @@ impl ImageScratchLayout {
         }
     }
 }
+
+/// Bytes reserved for the header at the start of a hierarchy arena.
+pub const BVH_HEADER_BYTES: usize = 128;
+
+/// Magic word of a hierarchy arena: "CRBV".
+pub const BVH_MAGIC: u32 = u32::from_le_bytes(*b"CRBV");
+/// Layout version of [`BvhArenaHeader`] and [`crate::bvh::BvhNode`].
+pub const BVH_VERSION: u32 = 1;
+
+/// Where the parts of a hierarchy arena lie: `[header | nodes | refs]`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BvhArenaLayout {
+    /// Node slots.
+    pub nodes: usize,
+    /// Reference slots.
+    pub refs: usize,
+    /// Offset of the nodes.
+    pub nodes_offset: usize,
+    /// Offset of the references.
+    pub refs_offset: usize,
+    /// Bytes the layout covers.
+    pub total_bytes: usize,
+}
+
+impl BvhArenaLayout {
+    /// The layout holding `nodes` node slots and `refs` references.
+    pub fn of(nodes: usize, refs: usize) -> BvhArenaLayout {
+        const _: () = assert!(size_of::<BvhArenaHeader>() <= BVH_HEADER_BYTES);
+        let nodes_offset = BVH_HEADER_BYTES;
+        let refs_offset =
+            nodes_offset + align_up(nodes.saturating_mul(size_of::<crate::bvh::BvhNode>()));
+        BvhArenaLayout {
+            nodes,
+            refs,
+            nodes_offset,
+            refs_offset,
+            total_bytes: refs_offset.saturating_add(align_up(refs.saturating_mul(4))),
+        }
+    }
+}
+
+/// Where the parts of a hierarchy build's scratch arena lie:
+/// `[boxes | keys | links | clusters]` for the static builders, the
+/// insertion order (`links`) alone for R-trees.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BvhScratchLayout {
+    /// Element counts.
+    pub counts: crate::bvh::BvhRequirements,
+    /// Offset of the keys.
+    pub keys_offset: usize,
+    /// Offset of the links.
+    pub links_offset: usize,
+    /// Offset of the clusters.
+    pub clusters_offset: usize,
+    /// Bytes the layout covers.
+    pub total_bytes: usize,
+}
+
+impl BvhScratchLayout {
+    /// The scratch layout of `counts`.
+    pub fn of(counts: &crate::bvh::BvhRequirements) -> BvhScratchLayout {
+        let keys_offset = align_up(counts.boxes * size_of::<crate::Aabb>());
+        let links_offset = keys_offset + align_up(counts.keys * 4);
+        let clusters_offset = links_offset + align_up(counts.links * 4);
+        let total_bytes = clusters_offset + counts.clusters * size_of::<crate::bvh::BvhNode>();
+        BvhScratchLayout {
+            counts: *counts,
+            keys_offset,
+            links_offset,
+            clusters_offset,
+            total_bytes,
+        }
+    }
+}
+
+/// The header at the start of a hierarchy arena: which builder made it,
+/// the scene it was built on, its [`crate::bvh::BvhInfo`], an R-tree's
+/// parameters and state, and where the parts lie.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[repr(C)]
+pub struct BvhArenaHeader {
+    /// [`BVH_MAGIC`].
+    pub magic: u32,
+    /// [`BVH_VERSION`].
+    pub version: u32,
+    /// The builder (the C ABI's `CORAY_BVH_*` numbers).
+    pub builder: u32,
+    /// Triangles, spheres and cones of the scene built on.
+    pub scene_counts: [u32; 3],
+    /// Shape of the hierarchy.
+    pub info: crate::bvh::BvhInfo,
+    /// R-trees: M and m (0 for the static builders).
+    pub max_children: u32,
+    /// See `max_children`.
+    pub min_children: u32,
+    /// R-trees: 1 for the R*-tree's rules, else 0.
+    pub rstar: u32,
+    /// R-trees: free lists and counts.
+    pub rtree: crate::bvh::RTreeState,
+    /// Bytes of the arena the layout covers.
+    pub layout_bytes: u32,
+    /// Node slots.
+    pub nodes_cap: u32,
+    /// Reference slots.
+    pub refs_cap: u32,
+    /// Most objects the hierarchy may hold: the static builders' object
+    /// count; for an R-tree, what its layout holds in the worst case
+    /// (inserts beyond it are refused, so deletes' scratch stays bounded).
+    pub capacity: u32,
+}
+
+impl BvhArenaHeader {
+    /// Checks magic, version and that the layout the capacities give fits in
+    /// `arena_bytes` and matches `layout_bytes`; O(1). The hierarchy itself
+    /// is checked by [`crate::bvh::Bvh::validate`] and [`crate::bvh::RTree::validate`].
+    pub fn layout(&self, arena_bytes: usize) -> Result<BvhArenaLayout, crate::Error> {
+        let corrupt = |what| Err(crate::Error::Corrupt { what });
+        if self.magic != BVH_MAGIC {
+            return corrupt("magic");
+        }
+        if self.version != BVH_VERSION {
+            return corrupt("version");
+        }
+        let l = BvhArenaLayout::of(self.nodes_cap as usize, self.refs_cap as usize);
+        if l.total_bytes != self.layout_bytes as usize {
+            return corrupt("layout");
+        }
+        if l.total_bytes > arena_bytes {
+            return corrupt("arena shorter than its layout");
+        }
+        let i = &self.info;
+        if i.root >= self.nodes_cap
+            || i.node_count > self.nodes_cap
+            || i.ref_count > self.refs_cap
+            || i.ref_count > self.capacity
+        {
+            return corrupt("counts");
+        }
+        Ok(l)
+    }
+}

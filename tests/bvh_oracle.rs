@@ -144,9 +144,10 @@ fn every_builder_matches_the_oracle() {
         let (mut nodes, mut refs) = (Vec::new(), Vec::new());
         let t = build_rtree(&scene, p, &mut nodes, &mut refs);
         assert_eq!(t.len() as usize, n);
-        let bvh = t.bvh();
-        let v = bvh.validate(Some(p.min_children)).unwrap();
+        let v = t.validate().unwrap();
         assert_eq!(v.refs as usize, n, "{name}");
+        assert_eq!(v.nodes, t.bvh().info.node_count, "{name}");
+        let bvh = t.bvh();
         check(&bvh, &rays, &name, oracle_of(&scene));
     }
 }
@@ -235,8 +236,8 @@ fn rtree_insert_into_a_full_arena() {
             "{p:?}: full after {inserted} of the 100 it was sized for"
         );
         assert_eq!(t.len(), inserted);
+        t.validate().unwrap();
         let bvh = t.bvh();
-        bvh.validate(Some(p.min_children)).unwrap();
         // It holds exactly the first `inserted` triangles.
         let rays = random_rays(&mut rng, 400, 5.0);
         check(&bvh, &rays, "full", |r| brute(&scene, r, |q| q < inserted));
@@ -281,8 +282,9 @@ fn rtree_delete_and_reinsert() {
             }
             let left = gone.iter().filter(|g| !**g).count() as u32;
             assert_eq!(t.len(), left);
+            let v = t.validate().unwrap();
+            assert_eq!(v.nodes, t.bvh().info.node_count);
             let bvh = t.bvh();
-            bvh.validate(Some(p.min_children)).unwrap();
             check(&bvh, &rays, &format!("{p:?} round {round}"), |r| {
                 brute(&scene, r, |q| !gone[q as usize])
             });
@@ -292,10 +294,28 @@ fn rtree_delete_and_reinsert() {
             t.delete(q, &mut orphans).unwrap();
         }
         assert!(t.is_empty());
-        t.bvh().validate(Some(p.min_children)).unwrap();
+        t.validate().unwrap();
         for q in 0..n {
             t.insert(q).unwrap();
         }
         check(&t.bvh(), &rays, "reinserted", oracle_of(&scene));
+        // Taken up again from its slices and state, it is the same tree.
+        let state = t.state();
+        drop(t);
+        let mut t = RTree::resume(&scene, p, &mut nodes, &mut refs, state).unwrap();
+        t.validate().unwrap();
+        t.delete(0, &mut orphans).unwrap();
+        check(&t.bvh(), &rays, "resumed", |r| brute(&scene, r, |q| q != 0));
+        // A corrupt free list is caught by validate, a bad state by resume.
+        let mut bad = t.state();
+        bad.free_node_blocks += 1;
+        let state = t.state();
+        drop(t);
+        assert!(RTree::resume(&scene, p, &mut nodes, &mut refs, bad)
+            .map(|t| t.validate().is_err())
+            .unwrap_or(true));
+        bad = state;
+        bad.node_blocks = u32::MAX / 64;
+        assert!(RTree::resume(&scene, p, &mut nodes, &mut refs, bad).is_err());
     }
 }

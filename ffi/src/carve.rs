@@ -28,6 +28,11 @@ unsafe impl Plain for coray::lcts::HistoryRecord {}
 unsafe impl Plain for coray::lcts::CornerInfo {}
 unsafe impl Plain for coray::lcts::hlcts::HlctsEntry {}
 unsafe impl Plain for u8 {}
+unsafe impl Plain for f32 {}
+unsafe impl Plain for coray::Aabb {}
+unsafe impl Plain for coray::bvh::BvhNode {}
+unsafe impl Plain for coray::bvh::BvhStackItem {}
+unsafe impl Plain for coray::arena::BvhArenaHeader {}
 
 const _: () = {
     assert!(size_of::<KdNode>() == 8 && align_of::<KdNode>() <= ARENA_ALIGN);
@@ -42,6 +47,10 @@ const _: () = {
         size_of::<coray::lcts::CornerInfo>() == 40 && align_of::<coray::lcts::CornerInfo>() == 4
     );
     assert!(size_of::<coray::lcts::hlcts::HlctsEntry>() == 96);
+    assert!(size_of::<coray::Aabb>() == 24 && align_of::<coray::Aabb>() == 4);
+    assert!(size_of::<coray::bvh::BvhNode>() == 32 && align_of::<coray::bvh::BvhNode>() == 4);
+    assert!(size_of::<coray::bvh::BvhStackItem>() == 8);
+    assert!(size_of::<coray::arena::BvhArenaHeader>() == 108);
 };
 
 /// Checks an arena pointer: not null, aligned to [`ARENA_ALIGN`].

@@ -20,11 +20,13 @@
 #[cfg(feature = "std")]
 extern crate std;
 
+mod bvh;
 mod carve;
 mod kdtree;
 mod lcts;
 mod types;
 
+pub use bvh::*;
 pub use kdtree::*;
 pub use lcts::*;
 pub use types::*;

@@ -100,3 +100,8 @@ fn embree_crosscheck() {
     let out = run_program("embree_crosscheck", &["-lembree3"]);
     assert!(out.contains("embree_crosscheck: ok"));
 }
+
+#[test]
+fn bvh_builders_insert_delete_and_errors() {
+    assert!(run_program("bvh", &[]).contains("bvh: ok"));
+}

@@ -20,7 +20,8 @@ pub use build_nn::build_nn;
 pub use build_tdbs::build_tdbs;
 pub use node::BvhNode;
 pub use rtree::{
-    rtree_requirements, InsertOrder, RTree, RTreeParams, RTreeRequirements, Split, MAX_CHILDREN,
+    rtree_requirements, validate_rtree, InsertOrder, RTree, RTreeParams, RTreeRequirements,
+    RTreeState, Split, MAX_CHILDREN,
 };
 pub use traverse::{BvhStackItem, BvhStats, BOX_HIT_COST};
 pub use validate::BvhTreeStats;

@@ -117,23 +117,101 @@ pub fn rtree_requirements(capacity: usize, params: &RTreeParams) -> RTreeRequire
     }
 }
 
+/// [`Bvh::validate`] with the R-tree's fill rules, and the parts only an
+/// R-tree has: each free list names blocks that were handed out, as many as
+/// its count says, none twice; blocks in use and free blocks add up to the
+/// blocks handed out; `bvh.info` agrees with `state`. For memory a caller
+/// loaded: a tree that passes can be traced, and resumed and changed.
+pub fn validate_rtree(
+    bvh: &Bvh,
+    params: &RTreeParams,
+    state: &RTreeState,
+) -> Result<super::BvhTreeStats, Error> {
+    let corrupt = |what| Err(Error::Corrupt { what });
+    params.check()?;
+    let big = params.max_children;
+    let st = state;
+    if bvh.info.max_children != big || bvh.info.root != 0 || st.height as usize > MAX_HEIGHT {
+        return corrupt("R-tree shape");
+    }
+    if 1 + st.node_blocks as usize * big as usize > bvh.nodes.len()
+        || st.ref_blocks as usize * big as usize > bvh.refs.len()
+    {
+        return corrupt("blocks beyond the slices");
+    }
+    // Walk each free list no further than its count: a list that ends
+    // after exactly that many steps has no repeats.
+    let mut b = st.free_nodes;
+    for _ in 0..st.free_node_blocks {
+        if b == NONE || b == 0 || (b - 1) % big != 0 || (b - 1) / big >= st.node_blocks {
+            return corrupt("free node list");
+        }
+        b = bvh.nodes[b as usize].first;
+    }
+    if b != NONE {
+        return corrupt("free node list longer than its count");
+    }
+    let mut b = st.free_refs;
+    for _ in 0..st.free_ref_blocks {
+        if b == NONE || b % big != 0 || b / big >= st.ref_blocks {
+            return corrupt("free reference list");
+        }
+        b = bvh.refs[b as usize];
+    }
+    if b != NONE {
+        return corrupt("free reference list longer than its count");
+    }
+    let stats = bvh.validate(Some(params.min_children))?;
+    // Every interior node owns one node block and every leaf one
+    // reference block.
+    let interior = stats.nodes - stats.leaves;
+    if interior + st.free_node_blocks != st.node_blocks
+        || stats.leaves + st.free_ref_blocks != st.ref_blocks
+    {
+        return corrupt("blocks in use and free blocks do not add up");
+    }
+    let i = &bvh.info;
+    if stats.refs != st.len
+        || stats.depth != st.height
+        || i.node_count != stats.nodes
+        || i.leaf_count != stats.leaves
+    {
+        return corrupt("counts disagree with the state");
+    }
+    Ok(stats)
+}
+
 /// A dynamic R-tree or R*-tree borrowing the caller's memory.
 pub struct RTree<'a> {
     scene: Scene<'a>,
     nodes: &'a mut [BvhNode],
     refs: &'a mut [u32],
     params: RTreeParams,
+    state: RTreeState,
+}
+
+/// Everything of an [`RTree`] besides its two slices and parameters: what a
+/// caller stores beside the slices to take the tree up again later
+/// ([`RTree::state`], [`RTree::resume`]). Plain data for an arena header.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[repr(C)]
+pub struct RTreeState {
     /// Levels below the root.
-    height: u32,
-    node_blocks: u32,
-    ref_blocks: u32,
-    /// Heads of the free lists (a freed block's first slot links on).
-    free_nodes: u32,
-    free_refs: u32,
+    pub height: u32,
+    /// Blocks ever taken from `nodes` (after the root slot) and `refs`.
+    pub node_blocks: u32,
+    /// See `node_blocks`.
+    pub ref_blocks: u32,
+    /// Heads of the free lists (a freed block's first slot links on), or `u32::MAX`.
+    pub free_nodes: u32,
+    /// See `free_nodes`.
+    pub free_refs: u32,
     /// Blocks on each free list.
-    free_node_blocks: u32,
-    free_ref_blocks: u32,
-    len: u32,
+    pub free_node_blocks: u32,
+    /// See `free_node_blocks`.
+    pub free_ref_blocks: u32,
+    /// Objects in the tree.
+    pub len: u32,
 }
 
 /// One entry while a node is being split: a child node, or (at leaf
@@ -194,14 +272,11 @@ impl<'a> RTree<'a> {
             nodes,
             refs,
             params,
-            height: 0,
-            node_blocks: 0,
-            ref_blocks: 0,
-            free_nodes: NONE,
-            free_refs: NONE,
-            free_node_blocks: 0,
-            free_ref_blocks: 0,
-            len: 0,
+            state: RTreeState {
+                free_nodes: NONE,
+                free_refs: NONE,
+                ..RTreeState::default()
+            },
         };
         let b = t.alloc_refs().expect("checked above");
         t.nodes[0] = BvhNode::leaf(&Aabb::EMPTY, b, 0);
@@ -263,14 +338,59 @@ impl<'a> RTree<'a> {
         Ok(t)
     }
 
+    /// Takes up a tree whose slices and [`RTree::state`] a caller kept
+    /// (an arena from the C ABI). Checks, in O(1), that the state fits the
+    /// slices; [`RTree::validate`] checks the rest on untrusted memory.
+    pub fn resume(
+        scene: &Scene<'a>,
+        params: RTreeParams,
+        nodes: &'a mut [BvhNode],
+        refs: &'a mut [u32],
+        state: RTreeState,
+    ) -> Result<RTree<'a>, Error> {
+        params.check()?;
+        let corrupt = |what| Err(Error::Corrupt { what });
+        let big = params.max_children as usize;
+        let st = &state;
+        if nodes.is_empty() || 1 + st.node_blocks as usize * big > nodes.len() {
+            return corrupt("node blocks beyond the nodes slice");
+        }
+        if st.ref_blocks == 0 || st.ref_blocks as usize * big > refs.len() {
+            return corrupt("reference blocks beyond the refs slice");
+        }
+        if st.free_node_blocks > st.node_blocks || st.free_ref_blocks > st.ref_blocks {
+            return corrupt("free block counts");
+        }
+        if st.height as usize > MAX_HEIGHT || st.len as usize > st.ref_blocks as usize * big {
+            return corrupt("height or length");
+        }
+        Ok(RTree {
+            scene: *scene,
+            nodes,
+            refs,
+            params,
+            state,
+        })
+    }
+
+    /// What [`RTree::resume`] needs besides the slices and parameters.
+    pub fn state(&self) -> RTreeState {
+        self.state
+    }
+
+    /// [`validate_rtree`] of this tree.
+    pub fn validate(&self) -> Result<super::BvhTreeStats, Error> {
+        validate_rtree(&self.bvh(), &self.params, &self.state)
+    }
+
     /// Objects in the tree.
     pub fn len(&self) -> u32 {
-        self.len
+        self.state.len
     }
 
     /// True when the tree holds nothing.
     pub fn is_empty(&self) -> bool {
-        self.len == 0
+        self.state.len == 0
     }
 
     /// The tree for tracing (and [`Bvh::validate`]).
@@ -283,9 +403,9 @@ impl<'a> RTree<'a> {
             info: BvhInfo {
                 root: 0,
                 node_count: self.live_nodes(),
-                leaf_count: self.ref_blocks - self.free_ref_blocks,
-                ref_count: self.len,
-                depth: self.height,
+                leaf_count: self.state.ref_blocks - self.state.free_ref_blocks,
+                ref_count: self.state.len,
+                depth: self.state.height,
                 max_children: big,
             },
         }
@@ -296,74 +416,64 @@ impl<'a> RTree<'a> {
         self.params
     }
 
-    /// Nodes in use: the root and every entry of an interior node.
+    /// Nodes in use: every interior node owns one node block and every
+    /// leaf one reference block, so this is O(1).
     fn live_nodes(&self) -> u32 {
-        let mut stack = [0u32; MAX_HEIGHT * MAX_CHILDREN as usize];
-        let (mut sp, mut n) = (1usize, 0u32);
-        while sp > 0 {
-            sp -= 1;
-            let nd = self.nodes[stack[sp] as usize];
-            n += 1;
-            if !nd.is_leaf() {
-                for i in 0..nd.len() {
-                    stack[sp] = nd.first + i;
-                    sp += 1;
-                }
-            }
-        }
-        n
+        let st = &self.state;
+        (st.node_blocks - st.free_node_blocks) + (st.ref_blocks - st.free_ref_blocks)
     }
 
     fn alloc_nodes(&mut self) -> Option<u32> {
         let big = self.params.max_children as usize;
-        if self.free_nodes != NONE {
-            let b = self.free_nodes;
-            self.free_nodes = self.nodes[b as usize].first;
-            self.free_node_blocks -= 1;
+        if self.state.free_nodes != NONE {
+            let b = self.state.free_nodes;
+            self.state.free_nodes = self.nodes[b as usize].first;
+            self.state.free_node_blocks -= 1;
             return Some(b);
         }
-        let start = 1 + self.node_blocks as usize * big;
+        let start = 1 + self.state.node_blocks as usize * big;
         if start + big > self.nodes.len() {
             return None;
         }
-        self.node_blocks += 1;
+        self.state.node_blocks += 1;
         Some(start as u32)
     }
 
     fn alloc_refs(&mut self) -> Option<u32> {
         let big = self.params.max_children as usize;
-        if self.free_refs != NONE {
-            let b = self.free_refs;
-            self.free_refs = self.refs[b as usize];
-            self.free_ref_blocks -= 1;
+        if self.state.free_refs != NONE {
+            let b = self.state.free_refs;
+            self.state.free_refs = self.refs[b as usize];
+            self.state.free_ref_blocks -= 1;
             return Some(b);
         }
-        let start = self.ref_blocks as usize * big;
+        let start = self.state.ref_blocks as usize * big;
         if start + big > self.refs.len() {
             return None;
         }
-        self.ref_blocks += 1;
+        self.state.ref_blocks += 1;
         Some(start as u32)
     }
 
     fn free_block(&mut self, leaf: bool, b: u32) {
         if leaf {
-            self.refs[b as usize] = self.free_refs;
-            self.free_refs = b;
-            self.free_ref_blocks += 1;
+            self.refs[b as usize] = self.state.free_refs;
+            self.state.free_refs = b;
+            self.state.free_ref_blocks += 1;
         } else {
-            self.nodes[b as usize].first = self.free_nodes;
-            self.free_nodes = b;
-            self.free_node_blocks += 1;
+            self.nodes[b as usize].first = self.state.free_nodes;
+            self.state.free_nodes = b;
+            self.state.free_node_blocks += 1;
         }
     }
 
     /// Blocks still obtainable: free lists plus untouched room.
     fn room(&self) -> (usize, usize) {
         let big = self.params.max_children as usize;
-        let nodes = self.free_node_blocks as usize + (self.nodes.len() - 1) / big
-            - self.node_blocks as usize;
-        let refs = self.free_ref_blocks as usize + self.refs.len() / big - self.ref_blocks as usize;
+        let nodes = self.state.free_node_blocks as usize + (self.nodes.len() - 1) / big
+            - self.state.node_blocks as usize;
+        let refs = self.state.free_ref_blocks as usize + self.refs.len() / big
+            - self.state.ref_blocks as usize;
         (nodes, refs)
     }
 
@@ -479,7 +589,7 @@ impl<'a> RTree<'a> {
                 self.nodes[b as usize + 1] = sibling;
                 let joint = old.bounds().union(&sibling.bounds());
                 self.nodes[0] = BvhNode::interior(&joint, b, 2);
-                self.height += 1;
+                self.state.height += 1;
                 break;
             }
             entry = sibling;
@@ -488,7 +598,7 @@ impl<'a> RTree<'a> {
         for l in (0..level.max(0) as usize).rev() {
             self.refit(path[l]);
         }
-        self.len += 1;
+        self.state.len += 1;
         Ok(())
     }
 
@@ -558,10 +668,10 @@ impl<'a> RTree<'a> {
     /// rather than whole subtrees); `orphans` is scratch of
     /// [`RTreeRequirements::scratch`] entries.
     pub fn delete(&mut self, prim: u32, orphans: &mut [u32]) -> Result<bool, Error> {
-        if orphans.len() < self.len as usize {
+        if orphans.len() < self.state.len as usize {
             return Err(Error::SliceTooSmall {
                 slice: "orphans",
-                needed: self.len as usize,
+                needed: self.state.len as usize,
                 got: orphans.len(),
             });
         }
@@ -603,7 +713,7 @@ impl<'a> RTree<'a> {
         let nd = self.nodes[leaf as usize];
         self.refs[(nd.first + i) as usize] = self.refs[(nd.first + nd.len() - 1) as usize];
         self.nodes[leaf as usize].set_len(nd.len() - 1);
-        self.len -= 1;
+        self.state.len -= 1;
         // CondenseTree: dissolve underfull nodes on the path, bottom up.
         let mut orphan_count = 0usize;
         for l in (1..=depth).rev() {
@@ -629,14 +739,14 @@ impl<'a> RTree<'a> {
                     .alloc_refs()
                     .expect("the dissolved leaves freed their blocks");
                 self.nodes[0] = BvhNode::leaf(&Aabb::EMPTY, b, 0);
-                self.height = 0;
+                self.state.height = 0;
                 break;
             }
             self.nodes[0] = self.nodes[root.first as usize];
             self.free_block(false, root.first);
-            self.height -= 1;
+            self.state.height -= 1;
         }
-        self.len -= orphan_count as u32;
+        self.state.len -= orphan_count as u32;
         for &p in &orphans[..orphan_count] {
             self.insert(p)?;
         }
