@@ -301,7 +301,7 @@ fn rtree_delete_and_reinsert() {
         check(&t.bvh(), &rays, "reinserted", oracle_of(&scene));
         // Taken up again from its slices and state, it is the same tree.
         let state = t.state();
-        drop(t);
+        // (`t` is not used again: its borrow of the slices ends here.)
         let mut t = RTree::resume(&scene, p, &mut nodes, &mut refs, state).unwrap();
         t.validate().unwrap();
         t.delete(0, &mut orphans).unwrap();
@@ -310,7 +310,6 @@ fn rtree_delete_and_reinsert() {
         let mut bad = t.state();
         bad.free_node_blocks += 1;
         let state = t.state();
-        drop(t);
         assert!(RTree::resume(&scene, p, &mut nodes, &mut refs, bad)
             .map(|t| t.validate().is_err())
             .unwrap_or(true));
