@@ -5,7 +5,8 @@
  * kept; a copied arena traces the same; bad input gets its status. */
 #include "common.h"
 
-static const char *names[] = {"tdbs", "tdbs-sah", "nn", "rtree", "rstar"};
+static const char *names[] = {"tdbs", "tdbs-sah", "nn", "rtree", "rstar", "nn-chain"};
+#define IS_RTREE(b) ((b) == CORAY_BVH_RTREE || (b) == CORAY_BVH_RSTAR)
 
 /* Hits of `rays` through a kd-tree over `view` (the reference). */
 static void kd_reference(const CorayScene *view, const CorayRay *rays, size_t n, CorayHit *hits, uint8_t *occ) {
@@ -74,7 +75,7 @@ static void every_builder_matches_the_kd_tree(void) {
     nprims = ts.nt + ts.ns + ts.nc;
     rays_random(rays, n, 1.0f);
     kd_reference(&ts.view, rays, n, want, want_occ);
-    for (b = CORAY_BVH_TDBS; b <= CORAY_BVH_RSTAR; b++) {
+    for (b = CORAY_BVH_TDBS; b <= CORAY_BVH_NN_CHAIN; b++) {
         CorayBvhParams p = coray_bvh_params_default(b);
         CorayBvhInfo info;
         CorayBvhTreeStats vs;
@@ -85,8 +86,8 @@ static void every_builder_matches_the_kd_tree(void) {
         CHECK_STATUS(coray_bvh_info(h.arena, h.bytes, &info), CORAY_STATUS_OK);
         CHECK(info.builder == b);
         CHECK(info.object_count == nprims);
-        CHECK(info.max_children == (b >= CORAY_BVH_RTREE ? 8u : 2u));
-        CHECK(b >= CORAY_BVH_RTREE || info.node_count == 2 * nprims - 1);
+        CHECK(info.max_children == (IS_RTREE(b) ? 8u : 2u));
+        CHECK(IS_RTREE(b) || info.node_count == 2 * nprims - 1);
         CHECK(info.capacity >= nprims);
         CHECK(info.arena_bytes_used <= h.bytes);
         CHECK(info.bounds_min[0] < -0.9f && info.bounds_max[0] > 0.9f);
@@ -115,7 +116,7 @@ static void every_builder_matches_the_kd_tree(void) {
             CHECK_STATUS(coray_bvh_info(copy, h.bytes, &ci), CORAY_STATUS_OK);
             CHECK_STATUS(coray_bvh_intersect(copy, h.bytes, &ts.view, rays, &hit, 1, stack, ci.stack_bytes - 1, NULL), CORAY_STATUS_ARENA_TOO_SMALL);
             CHECK_STATUS(coray_bvh_intersect(copy, h.bytes, &ts.view, rays, &hit, 1, NULL, ci.stack_bytes, NULL), CORAY_STATUS_NULL_POINTER);
-            if (b < CORAY_BVH_RTREE)
+            if (!IS_RTREE(b))
                 CHECK_STATUS(coray_bvh_insert(copy, h.bytes, &ts.view, 0), CORAY_STATUS_INVALID_PARAMETER);
             /* The original arena, zeroed, is no hierarchy. */
             CHECK_STATUS(coray_bvh_info(h.arena, h.bytes, &ci), CORAY_STATUS_CORRUPT_ARENA);
@@ -139,7 +140,7 @@ static void exact_fit_and_one_less(void) {
     uint32_t b;
     rng_state = 42;
     ts = scene_random(300, 50, 50, 1.0f);
-    for (b = CORAY_BVH_TDBS; b <= CORAY_BVH_RSTAR; b++) {
+    for (b = CORAY_BVH_TDBS; b <= CORAY_BVH_NN_CHAIN; b++) {
         CorayBvhParams p = coray_bvh_params_default(b);
         CorayBvhRequirements req;
         size_t needed = 0, nprims = ts.nt + ts.ns + ts.nc;
@@ -231,7 +232,7 @@ static void rtree_insert_and_delete(void) {
 static void bad_input(void) {
     CorayBvhParams p = coray_bvh_params_default(CORAY_BVH_RTREE);
     CorayBvhRequirements req;
-    CHECK(coray_bvh_params_default(5).struct_size == 0);
+    CHECK(coray_bvh_params_default(6).struct_size == 0);
     CHECK_STATUS(coray_bvh_requirements(10, NULL, &req), CORAY_STATUS_NULL_POINTER);
     CHECK_STATUS(coray_bvh_requirements(10, &p, NULL), CORAY_STATUS_NULL_POINTER);
     p.max_children = 3;
@@ -258,7 +259,7 @@ static void bad_input(void) {
         CorayHit h;
         uint8_t o = 7;
         uint32_t b;
-        for (b = CORAY_BVH_TDBS; b <= CORAY_BVH_RSTAR; b++) {
+        for (b = CORAY_BVH_TDBS; b <= CORAY_BVH_NN_CHAIN; b++) {
             CorayBvhParams q = coray_bvh_params_default(b);
             CorayBvhInfo info;
             Bvh e = bvh_build(&empty, &q, 0);

@@ -25,6 +25,10 @@
 // The R*-tree (no forced reinsertion); dynamic.
 #define CORAY_BVH_RSTAR 4
 
+// Bottom-up matching by a nearest-neighbour chain: the joins of
+// `CORAY_BVH_NN` (exact ties aside) in sub-quadratic time.
+#define CORAY_BVH_NN_CHAIN 5
+
 // R-trees insert in scene order.
 #define CORAY_BVH_ORDER_SCENE 0
 
@@ -107,7 +111,7 @@ typedef enum CorayStatus {
 typedef struct CorayBvhParams {
   // `sizeof(CorayBvhParams)`.
   size_t struct_size;
-  // `CORAY_BVH_TDBS`, `_TDBS_SAH`, `_NN`, `_RTREE` or `_RSTAR`.
+  // `CORAY_BVH_TDBS`, `_TDBS_SAH`, `_NN`, `_NN_CHAIN`, `_RTREE` or `_RSTAR`.
   uint32_t builder;
   // TDBS builders: most primitives per leaf (at least 1; the thesis: 1).
   // Bottom-up matching always makes leaves of 1.

@@ -4,8 +4,8 @@ mod common;
 
 use common::*;
 use coray::bvh::{
-    self, build_nn, build_tdbs, rtree_requirements, Builder, Bvh, BvhNode, BvhScratch,
-    BvhStackItem, BvhStats, BvhStorage, InsertOrder, RTree, RTreeParams, Split,
+    self, rtree_requirements, Builder, Bvh, BvhNode, BvhScratch, BvhStackItem, BvhStats,
+    BvhStorage, InsertOrder, RTree, RTreeParams, Split,
 };
 use coray::{oracle, Aabb, Error, Hit, Ray, Scene};
 
@@ -42,10 +42,7 @@ impl Static {
             links: &mut self.links,
             clusters: &mut self.clusters,
         };
-        match b {
-            Builder::Nn => build_nn(scene, storage, scratch),
-            _ => build_tdbs(scene, b, 1, storage, scratch),
-        }
+        bvh::build(scene, b, 1, storage, scratch)
     }
 }
 
@@ -84,7 +81,12 @@ fn oracle_of<'a>(scene: &'a Scene<'a>) -> impl Fn(&Ray) -> (Hit, bool) + 'a {
     move |r| (oracle::intersect(scene, r), oracle::occluded(scene, r))
 }
 
-const STATIC: [Builder; 3] = [Builder::Tdbs, Builder::TdbsSah, Builder::Nn];
+const STATIC: [Builder; 4] = [
+    Builder::Tdbs,
+    Builder::TdbsSah,
+    Builder::Nn,
+    Builder::NnChain,
+];
 
 fn rtree_params() -> Vec<(String, RTreeParams)> {
     let mut v = Vec::new();
@@ -184,6 +186,65 @@ fn empty_single_and_degenerate_scenes() {
         assert_eq!(t.len(), 1, "{name}");
         check(&t.bvh(), &rays, &name, oracle_of(&scene));
     }
+}
+
+/// The interior boxes of a hierarchy, sorted: two builds made the same
+/// joins exactly when these agree.
+fn joins(bvh: &Bvh) -> Vec<[u32; 6]> {
+    let mut v: Vec<[u32; 6]> = bvh.nodes[..bvh.info.node_count as usize]
+        .iter()
+        .filter(|n| !n.is_leaf())
+        .map(|n| {
+            let b = n.bounds();
+            [b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z].map(f32::to_bits)
+        })
+        .collect();
+    v.sort_unstable();
+    v
+}
+
+/// The nearest-neighbour chain makes the same joins as the thesis'
+/// quadratic search (random boxes: no exact ties), and nearly all of them
+/// on a symmetric SPD scene.
+#[test]
+fn nn_chain_makes_the_quadratic_joins() {
+    let mut rng = Rng(8);
+    for (nt, ns, nc) in [(2, 0, 0), (3, 1, 0), (40, 10, 10), (700, 150, 150)] {
+        let o = random_scene(&mut rng, nt, ns, nc, 10.0);
+        let scene = o.scene();
+        let n = scene.prim_count();
+        let mut a = Static::new(n, Builder::Nn, 0);
+        let mut b = Static::new(n, Builder::NnChain, 0);
+        let (qa, qb) = (
+            a.build(&scene, Builder::Nn).unwrap(),
+            b.build(&scene, Builder::NnChain).unwrap(),
+        );
+        qb.validate(None).unwrap();
+        assert_eq!(joins(&qa), joins(&qb), "n = {n}");
+        assert_eq!(qa.info.depth, qb.info.depth, "n = {n}");
+    }
+    use coray_scenes::spd::{generate, Options};
+    let m = coray_scenes::SceneMesh::from_nff(
+        &generate("balls", Some(2), &Options::default()).unwrap(),
+    );
+    let scene = m.scene();
+    let n = scene.prim_count();
+    let mut a = Static::new(n, Builder::Nn, 0);
+    let mut b = Static::new(n, Builder::NnChain, 0);
+    let (qa, qb) = (
+        a.build(&scene, Builder::Nn).unwrap(),
+        b.build(&scene, Builder::NnChain).unwrap(),
+    );
+    // The sphereflake is symmetric: equal joint areas are common, and the
+    // two searches may break those ties differently, then diverge a little.
+    let (ja, jb) = (joins(&qa), joins(&qb));
+    let shared = ja.iter().filter(|j| jb.binary_search(j).is_ok()).count();
+    assert_eq!(ja.len(), jb.len());
+    assert!(
+        shared * 10 >= ja.len() * 9,
+        "balls 2: {shared} of {} joins shared",
+        ja.len()
+    );
 }
 
 /// Static builds: exactly `requirements` succeeds, one node less fails

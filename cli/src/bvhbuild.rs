@@ -1,14 +1,13 @@
 //! Owned storage for the hierarchies of `coray::bvh`, built by name.
 
 use coray::bvh::{
-    self, build_nn, build_tdbs, rtree_requirements, Builder, Bvh, BvhNode, BvhScratch, BvhStorage,
-    RTree, RTreeParams,
+    self, rtree_requirements, Builder, Bvh, BvhNode, BvhScratch, BvhStorage, RTree, RTreeParams,
 };
 use coray::{Aabb, Scene};
 use std::time::Instant;
 
 /// The hierarchy methods, as `coray bench` names them.
-pub const METHODS: [&str; 5] = ["tdbs", "tdbs-sah", "nn", "rtree", "rstar"];
+pub const METHODS: [&str; 6] = ["tdbs", "tdbs-sah", "nn", "nn-chain", "rtree", "rstar"];
 
 /// A built hierarchy's memory and what the build took.
 pub struct OwnedBvh {
@@ -49,6 +48,7 @@ impl OwnedBvh {
             "tdbs" => Builder::Tdbs,
             "tdbs-sah" => Builder::TdbsSah,
             "nn" => Builder::Nn,
+            "nn-chain" => Builder::NnChain,
             m => return Err(format!("unknown hierarchy `{m}`")),
         };
         let req = bvh::requirements(n, builder);
@@ -69,11 +69,8 @@ impl OwnedBvh {
             links: &mut links,
             clusters: &mut clusters,
         };
-        let built = match builder {
-            Builder::Nn => build_nn(scene, storage, scratch),
-            b => build_tdbs(scene, b, 1, storage, scratch),
-        }
-        .map_err(|e| format!("{method} build: {e}"))?;
+        let built = bvh::build(scene, builder, 1, storage, scratch)
+            .map_err(|e| format!("{method} build: {e}"))?;
         let info = built.info;
         let build_ms = t.elapsed().as_secs_f64() * 1e3;
         Ok(OwnedBvh {

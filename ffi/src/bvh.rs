@@ -25,6 +25,9 @@ pub const CORAY_BVH_NN: u32 = 2;
 pub const CORAY_BVH_RTREE: u32 = 3;
 /// The R*-tree (no forced reinsertion); dynamic.
 pub const CORAY_BVH_RSTAR: u32 = 4;
+/// Bottom-up matching by a nearest-neighbour chain: the joins of
+/// `CORAY_BVH_NN` (exact ties aside) in sub-quadratic time.
+pub const CORAY_BVH_NN_CHAIN: u32 = 5;
 
 /// R-trees insert in scene order.
 pub const CORAY_BVH_ORDER_SCENE: u32 = 0;
@@ -39,7 +42,7 @@ pub const CORAY_BVH_ORDER_SORTED: u32 = 2;
 pub struct CorayBvhParams {
     /// `sizeof(CorayBvhParams)`.
     pub struct_size: usize,
-    /// `CORAY_BVH_TDBS`, `_TDBS_SAH`, `_NN`, `_RTREE` or `_RSTAR`.
+    /// `CORAY_BVH_TDBS`, `_TDBS_SAH`, `_NN`, `_NN_CHAIN`, `_RTREE` or `_RSTAR`.
     pub builder: u32,
     /// TDBS builders: most primitives per leaf (at least 1; the thesis: 1).
     /// Bottom-up matching always makes leaves of 1.
@@ -135,7 +138,7 @@ pub struct CorayBvhStats {
 pub extern "C" fn coray_bvh_params_default(builder: u32) -> CorayBvhParams {
     let r = RTreeParams::rtree();
     CorayBvhParams {
-        struct_size: if builder <= CORAY_BVH_RSTAR {
+        struct_size: if builder <= CORAY_BVH_NN_CHAIN {
             size_of::<CorayBvhParams>()
         } else {
             0
@@ -195,6 +198,7 @@ impl CorayBvhParams {
             CORAY_BVH_TDBS => leaf(Builder::Tdbs),
             CORAY_BVH_TDBS_SAH => leaf(Builder::TdbsSah),
             CORAY_BVH_NN => Ok(Kind::Static(Builder::Nn, 1)),
+            CORAY_BVH_NN_CHAIN => Ok(Kind::Static(Builder::NnChain, 1)),
             CORAY_BVH_RTREE => rtree(Split::Quadratic),
             CORAY_BVH_RSTAR => rtree(Split::RStar),
             _ => Err(CorayStatus::InvalidParameter),
@@ -384,10 +388,7 @@ pub unsafe extern "C" fn coray_bvh_build(
                     links,
                     clusters,
                 };
-                let t = match b {
-                    Builder::Nn => bvh::build_nn(&scene, storage, scratch)?,
-                    _ => bvh::build_tdbs(&scene, b, leaf_size, storage, scratch)?,
-                };
+                let t = bvh::build(&scene, b, leaf_size, storage, scratch)?;
                 h.info = t.info;
             }
             Kind::RTree(rp) => {

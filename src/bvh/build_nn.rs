@@ -89,20 +89,29 @@ pub fn build_nn<'a>(
     } else {
         clusters[0]
     };
-    // Depths: a parent always sits above its children (the root at 0 aside).
+    let depth = if n > 0 {
+        pair_depths(nodes, top, links)
+    } else {
+        0
+    };
+    Ok(binary(scene, nodes, refs, top, n, depth))
+}
+
+/// Depth of a binary hierarchy whose nodes `1..top` were placed in sibling
+/// pairs (`1, 2`, `3, 4`, ...) before their parent, the root at 0; `depths`
+/// is scratch of `top / 2 + 1` entries (one per pair).
+pub(crate) fn pair_depths(nodes: &[BvhNode], top: usize, depths: &mut [u32]) -> u32 {
     let pair = |i: usize| i.div_ceil(2);
     let mut depth = 0;
-    if n > 0 {
-        links[0] = 0;
-        for i in core::iter::once(0).chain((1..top).rev()) {
-            let nd = nodes[i];
-            let d = links[pair(i)];
-            if nd.is_leaf() {
-                depth = depth.max(d);
-            } else {
-                links[pair(nd.first as usize)] = d + 1;
-            }
+    depths[0] = 0;
+    for i in core::iter::once(0).chain((1..top).rev()) {
+        let nd = nodes[i];
+        let d = depths[pair(i)];
+        if nd.is_leaf() {
+            depth = depth.max(d);
+        } else {
+            depths[pair(nd.first as usize)] = d + 1;
         }
     }
-    Ok(binary(scene, nodes, refs, top, n, depth))
+    depth
 }

@@ -45,7 +45,7 @@ pub fn build_tdbs<'a>(
     storage: BvhStorage<'a>,
     scratch: BvhScratch,
 ) -> Result<Bvh<'a>, Error> {
-    if builder == Builder::Nn {
+    if matches!(builder, Builder::Nn | Builder::NnChain) {
         return Err(Error::InvalidParameter { name: "builder" });
     }
     if leaf_size == 0 {

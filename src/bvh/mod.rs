@@ -10,6 +10,7 @@
 //! all; the caller owns the traversal stack ([`Bvh::stack_len`]).
 
 mod build_nn;
+mod build_nn_chain;
 mod build_tdbs;
 mod node;
 mod rtree;
@@ -17,6 +18,7 @@ mod traverse;
 mod validate;
 
 pub use build_nn::build_nn;
+pub use build_nn_chain::build_nn_chain;
 pub use build_tdbs::build_tdbs;
 pub use node::BvhNode;
 pub use rtree::{
@@ -40,12 +42,16 @@ pub enum Builder {
     /// `A_L * n_L + A_R * n_R` instead.
     TdbsSah,
     /// Bottom-up: repeatedly join the two clusters whose joint box has the
-    /// smallest surface area.
+    /// smallest surface area (the thesis' algorithm, O(n^2)).
     Nn,
+    /// The same joins found by a nearest-neighbour chain over a kd-tree of
+    /// cluster boxes: sub-quadratic; exact ties may be broken differently.
+    NnChain,
 }
 
 /// Storage of a static hierarchy over `n` primitives: `2n - 1` nodes,
-/// `n` references, and build scratch of `n` of each scratch kind.
+/// `n` references, and build scratch of `n` of each scratch kind it uses
+/// (the chain build: `3n - 1` boxes, for its kd-tree of clusters).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct BvhRequirements {
     /// [`BvhNode`] slots of the hierarchy.
@@ -65,6 +71,9 @@ pub struct BvhRequirements {
 /// Room for a static hierarchy over `prim_count` primitives built by `builder`.
 pub fn requirements(prim_count: usize, builder: Builder) -> BvhRequirements {
     let n = prim_count;
+    if builder == Builder::NnChain {
+        return build_nn_chain::chain_requirements(n);
+    }
     BvhRequirements {
         nodes: (2 * n).saturating_sub(1).max(1),
         refs: n,
@@ -72,6 +81,22 @@ pub fn requirements(prim_count: usize, builder: Builder) -> BvhRequirements {
         keys: n,
         links: n,
         clusters: if builder == Builder::Nn { n } else { 0 },
+    }
+}
+
+/// Builds a static hierarchy with `builder`; `leaf_size` (at least 1) bounds
+/// the TDBS builders' leaves; bottom-up matching makes leaves of one.
+pub fn build<'a>(
+    scene: &Scene<'a>,
+    builder: Builder,
+    leaf_size: u32,
+    storage: BvhStorage<'a>,
+    scratch: BvhScratch,
+) -> Result<Bvh<'a>, Error> {
+    match builder {
+        Builder::Nn => build_nn(scene, storage, scratch),
+        Builder::NnChain => build_nn_chain(scene, storage, scratch),
+        b => build_tdbs(scene, b, leaf_size, storage, scratch),
     }
 }
 
