@@ -45,7 +45,8 @@ enum Command {
         /// Resolution WxH (default: the scene's).
         #[arg(long)]
         res: Option<String>,
-        /// Structure and traversal: kd, kd-rope, kd-paper, kd-paper-rope.
+        /// Structure and traversal: kd, kd-rope, kd-paper, kd-paper-rope, or a
+        /// hierarchy: tdbs, tdbs-sah, nn, nn-chain, rtree, rstar.
         #[arg(long, default_value = "kd")]
         accel: String,
         /// Reflection and refraction depth.
@@ -153,6 +154,41 @@ fn load_square(scene: &str, res: u32, opts: &Options) -> Result<scene::SceneData
     Ok(s)
 }
 
+/// Where `coray render` writes, and how.
+struct RenderOut<'a> {
+    scene: &'a scene::SceneData,
+    output: &'a std::path::Path,
+    threads: usize,
+    depth: u32,
+}
+
+impl RenderOut<'_> {
+    fn render<S: render::Shooter>(&self, shooter: &S, build_ms: f64) -> Result<(), String> {
+        let s = self.scene;
+        let tracer = render::Tracer {
+            mesh: &s.mesh,
+            shooter,
+            max_depth: self.depth,
+        };
+        let threads = self.threads;
+        let t = std::time::Instant::now();
+        let (rgb, st) = render::render(&tracer, threads, true);
+        let secs = t.elapsed().as_secs_f64();
+        let (w, h) = (s.mesh.camera.width, s.mesh.camera.height);
+        render::write_png(self.output, w, h, &rgb)?;
+        println!(
+            "{}: {} objects, {w}x{h}, {} rays ({:.2} Mrays/s on {threads} threads, build {:.0} ms) -> {}",
+            s.name,
+            s.mesh.counts.objects(),
+            st.rays,
+            st.rays as f64 / secs / 1e6,
+            build_ms,
+            self.output.display()
+        );
+        Ok(())
+    }
+}
+
 fn run(command: Command, opts: &Options) -> Result<(), String> {
     match command {
         Command::Render {
@@ -169,42 +205,41 @@ fn run(command: Command, opts: &Options) -> Result<(), String> {
                 s.mesh.camera.width = w;
                 s.mesh.camera.height = h;
             }
-            let (preset, method) = match accel.as_str() {
-                "kd" => ("auto", Traversal::Hierarchical),
-                "kd-rope" => ("auto", Traversal::Ropes),
-                "kd-paper" => ("paper", Traversal::Hierarchical),
-                "kd-paper-rope" => ("paper", Traversal::Ropes),
-                a => {
-                    return Err(format!(
-                        "unknown --accel `{a}` (kd, kd-rope, kd-paper, kd-paper-rope)"
-                    ))
-                }
-            };
-            let owned = kdbuild::OwnedKd::build(&s.mesh.scene(), &kdbuild::preset(preset)?)?;
-            let tree = owned.tree(s.mesh.scene());
-            let tracer = render::Tracer {
-                mesh: &s.mesh,
-                tree: &tree,
-                method,
-                max_depth: depth,
-            };
             let threads = threads
                 .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-            let t = std::time::Instant::now();
-            let (rgb, st) = render::render(&tracer, threads, true);
-            let secs = t.elapsed().as_secs_f64();
-            let (w, h) = (s.mesh.camera.width, s.mesh.camera.height);
-            render::write_png(&output, w, h, &rgb)?;
-            println!(
-                "{}: {} objects, {w}x{h}, {} rays ({:.2} Mrays/s on {threads} threads, build {:.0} ms) -> {}",
-                s.name,
-                s.mesh.counts.objects(),
-                st.rays,
-                st.rays as f64 / secs / 1e6,
-                owned.build_ms,
-                output.display()
-            );
-            Ok(())
+            let kd = match accel.as_str() {
+                "kd" => Some(("auto", Traversal::Hierarchical)),
+                "kd-rope" => Some(("auto", Traversal::Ropes)),
+                "kd-paper" => Some(("paper", Traversal::Hierarchical)),
+                "kd-paper-rope" => Some(("paper", Traversal::Ropes)),
+                _ => None,
+            };
+            let out = RenderOut {
+                scene: &s,
+                output: &output,
+                threads,
+                depth,
+            };
+            if let Some((preset, method)) = kd {
+                let owned = kdbuild::OwnedKd::build(&s.mesh.scene(), &kdbuild::preset(preset)?)?;
+                let tree = owned.tree(s.mesh.scene());
+                out.render(
+                    &render::KdShooter {
+                        tree: &tree,
+                        method,
+                    },
+                    owned.build_ms,
+                )
+            } else if bvhbuild::METHODS.contains(&accel.as_str()) {
+                let owned = bvhbuild::OwnedBvh::build(&s.mesh.scene(), &accel)?;
+                let bvh = owned.bvh(s.mesh.scene());
+                out.render(&render::BvhShooter { bvh }, owned.build_ms)
+            } else {
+                Err(format!(
+                    "unknown --accel `{accel}` (kd, kd-rope, kd-paper, kd-paper-rope, {})",
+                    bvhbuild::METHODS.join(", ")
+                ))
+            }
         }
         Command::Bench {
             scene,

@@ -3,25 +3,88 @@
 //! index of refraction) to a depth limit, NFF materials, `pp` normals
 //! interpolated. Rows are shared among threads; the structure is immutable.
 
+use coray::bvh::{Bvh, BvhStackItem, BvhStats};
 use coray::kd::{KdTree, Traversal};
-use coray::{Hit, Ray, TraceStats, Vec3};
+use coray::{Aabb, Hit, Ray, TraceStats, Vec3};
 use coray_scenes::SceneMesh;
 use std::io::{IsTerminal, Write};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-/// What a render needs to trace rays.
-pub struct Tracer<'a> {
-    pub mesh: &'a SceneMesh,
+/// A structure the renderer shoots rays through, with the per-thread state
+/// its traversal needs. The structure (and traversal) is chosen once per
+/// render: each kind gets its own monomorphised loop.
+pub trait Shooter: Sync {
+    /// Per-thread traversal state (a BVH's stack).
+    type Ctx;
+    fn ctx(&self) -> Self::Ctx;
+    fn intersect(&self, ray: &Ray, ctx: &mut Self::Ctx, st: &mut TraceStats) -> Hit;
+    fn occluded(&self, ray: &Ray, ctx: &mut Self::Ctx, st: &mut TraceStats) -> bool;
+    fn bounds(&self) -> Aabb;
+}
+
+/// A kd-tree with a fixed traversal.
+pub struct KdShooter<'a> {
     pub tree: &'a KdTree<'a>,
     pub method: Traversal,
+}
+
+impl Shooter for KdShooter<'_> {
+    type Ctx = ();
+    fn ctx(&self) {}
+    fn intersect(&self, ray: &Ray, _: &mut (), st: &mut TraceStats) -> Hit {
+        self.tree.intersect(ray, self.method, st)
+    }
+    fn occluded(&self, ray: &Ray, _: &mut (), st: &mut TraceStats) -> bool {
+        self.tree.occluded(ray, self.method, st)
+    }
+    fn bounds(&self) -> Aabb {
+        self.tree.info.bounds()
+    }
+}
+
+/// A bounding volume hierarchy (any builder).
+pub struct BvhShooter<'a> {
+    pub bvh: Bvh<'a>,
+}
+
+impl Shooter for BvhShooter<'_> {
+    type Ctx = (Vec<BvhStackItem>, BvhStats);
+    fn ctx(&self) -> Self::Ctx {
+        (
+            vec![BvhStackItem::default(); self.bvh.stack_len()],
+            BvhStats::default(),
+        )
+    }
+    fn intersect(&self, ray: &Ray, ctx: &mut Self::Ctx, st: &mut TraceStats) -> Hit {
+        ctx.1 = BvhStats::default();
+        let h = self.bvh.intersect(ray, &mut ctx.0, &mut ctx.1);
+        st.add(&ctx.1.trace);
+        h
+    }
+    fn occluded(&self, ray: &Ray, ctx: &mut Self::Ctx, st: &mut TraceStats) -> bool {
+        ctx.1 = BvhStats::default();
+        let o = self.bvh.occluded(ray, &mut ctx.0, &mut ctx.1);
+        st.add(&ctx.1.trace);
+        o
+    }
+    fn bounds(&self) -> Aabb {
+        let r = self.bvh.nodes[self.bvh.info.root as usize];
+        r.bounds()
+    }
+}
+
+/// What a render needs to trace rays.
+pub struct Tracer<'a, S: Shooter> {
+    pub mesh: &'a SceneMesh,
+    pub shooter: &'a S,
     pub max_depth: u32,
 }
 
 const EPS: f32 = 1e-4;
 
-impl Tracer<'_> {
+impl<S: Shooter> Tracer<'_, S> {
     fn scale(&self) -> f32 {
-        let b = self.tree.info.bounds();
+        let b = self.shooter.bounds();
         if b.is_empty() {
             1.0
         } else {
@@ -62,8 +125,8 @@ impl Tracer<'_> {
     }
 
     /// Colour seen along `ray`.
-    pub fn trace(&self, ray: &Ray, depth: u32, st: &mut TraceStats) -> Vec3 {
-        let h = self.tree.intersect(ray, self.method, st);
+    pub fn trace(&self, ray: &Ray, depth: u32, ctx: &mut S::Ctx, st: &mut TraceStats) -> Vec3 {
+        let h = self.shooter.intersect(ray, ctx, st);
         if !h.is_hit() {
             return self.mesh.background;
         }
@@ -85,7 +148,7 @@ impl Tracer<'_> {
                 continue;
             }
             let shadow = Ray::new(p, l, eps, dist);
-            if self.tree.occluded(&shadow, self.method, st) {
+            if self.shooter.occluded(&shadow, ctx, st) {
                 continue;
             }
             c += color * *lc * (m.kd * ndl * light_scale);
@@ -98,7 +161,7 @@ impl Tracer<'_> {
         if depth < self.max_depth {
             if m.ks > 0.0 {
                 let r = d - n * (2.0 * d.dot(n));
-                c += self.trace(&Ray::new(p, r, eps, f32::INFINITY), depth + 1, st) * m.ks;
+                c += self.trace(&Ray::new(p, r, eps, f32::INFINITY), depth + 1, ctx, st) * m.ks;
             }
             if m.t > 0.0 {
                 // Entering when the ray meets the geometric front side.
@@ -114,7 +177,7 @@ impl Tracer<'_> {
                 } else {
                     d * eta + n * (eta * cos_i - k.sqrt())
                 };
-                c += self.trace(&Ray::new(p, dir, eps, f32::INFINITY), depth + 1, st) * m.t;
+                c += self.trace(&Ray::new(p, dir, eps, f32::INFINITY), depth + 1, ctx, st) * m.t;
             }
         }
         c
@@ -122,7 +185,7 @@ impl Tracer<'_> {
 }
 
 /// Renders the camera's image with `threads` threads; RGB bytes, row 0 on top.
-pub fn render(t: &Tracer, threads: usize, progress: bool) -> (Vec<u8>, TraceStats) {
+pub fn render<S: Shooter>(t: &Tracer<S>, threads: usize, progress: bool) -> (Vec<u8>, TraceStats) {
     let cam = &t.mesh.camera;
     let (w, h) = (cam.width as usize, cam.height as usize);
     let (f, r, u) = cam.basis();
@@ -138,6 +201,7 @@ pub fn render(t: &Tracer, threads: usize, progress: bool) -> (Vec<u8>, TraceStat
             .map(|_| {
                 s.spawn(|| {
                     let mut st = TraceStats::default();
+                    let mut ctx = t.shooter.ctx();
                     loop {
                         let y = next.fetch_add(1, Ordering::Relaxed);
                         if y >= h {
@@ -152,7 +216,7 @@ pub fn render(t: &Tracer, threads: usize, progress: bool) -> (Vec<u8>, TraceStat
                                 t.mesh.hither.max(0.0),
                                 f32::INFINITY,
                             );
-                            let c = t.trace(&ray, 0, &mut st);
+                            let c = t.trace(&ray, 0, &mut ctx, &mut st);
                             for (k, v) in c.to_array().iter().enumerate() {
                                 row[3 * x + k] =
                                     (v.clamp(0.0, 1.0).powf(1.0 / 2.2) * 255.0 + 0.5) as u8;

@@ -79,7 +79,19 @@ fn render_every_accel_from_an_nff_file() {
          f 1 1 1 1 0 0 0 1\np 4\n-3 -3 0\n3 -3 0\n3 3 0\n-3 3 0\nf 0.2 0.4 1 0.5 0.5 20 0.3 1.5\ns 0 0 1 1\nc 2 0 0 0.3 2 0 2 0.1\n",
     )
     .unwrap();
-    for accel in ["kd", "kd-rope", "kd-paper", "kd-paper-rope"] {
+    const ACCELS: [&str; 10] = [
+        "kd",
+        "kd-rope",
+        "kd-paper",
+        "kd-paper-rope",
+        "tdbs",
+        "tdbs-sah",
+        "nn",
+        "nn-chain",
+        "rtree",
+        "rstar",
+    ];
+    for accel in ACCELS {
         let (code, out, err) = coray(
             &[
                 "render",
@@ -94,9 +106,9 @@ fn render_every_accel_from_an_nff_file() {
         assert_eq!(code, 0, "{err}");
         assert!(out.contains("3 objects, 48x32"), "{out}");
     }
-    // Every traversal renders the same picture.
+    // Every structure and traversal renders the same picture.
     let first = std::fs::read(d.join("kd.png")).unwrap();
-    for accel in ["kd-rope", "kd-paper", "kd-paper-rope"] {
+    for accel in &ACCELS[1..] {
         assert_eq!(
             std::fs::read(d.join(format!("{accel}.png"))).unwrap(),
             first,
