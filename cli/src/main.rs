@@ -8,8 +8,10 @@ mod bvhbuild;
 #[cfg(feature = "embree")]
 mod compare;
 mod kdbuild;
+mod plot;
 mod render;
 mod scene;
+mod series;
 mod stats;
 mod tables;
 
@@ -77,7 +79,9 @@ enum Command {
         #[arg(long)]
         json: bool,
         /// A paper's table instead of the method table: `bvh` (the thesis'
-        /// hierarchy metrics per builder, 6.3.1), `lcts` (Havran and
+        /// hierarchy metrics per builder on SCENE), `bvh-series` (thesis
+        /// 6.3.1: tree 1-11 floor whole and split, balls 1-4, gears 1-4, with
+        /// its observations checked; SCENE is ignored), `lcts` (Havran and
         /// Bittner's Table 2: SCENE may be a comma-separated list, or `spd:all`
         /// for the eight SPD scenes) or `lcts-res` (Table 3: SCENE, default
         /// spd:teapot, at 256 to --max-res pixels square).
@@ -86,6 +90,12 @@ enum Command {
         /// `--table lcts-res`: the largest resolution (Table 3 goes to 4096).
         #[arg(long, default_value_t = 4096)]
         max_res: u32,
+        /// `--table bvh-series`: leave out sizes above this one.
+        #[arg(long)]
+        max_size: Option<u32>,
+        /// `--table bvh-series`: also draw the series as charts in this PNG.
+        #[arg(long)]
+        plot: Option<PathBuf>,
     },
     /// Primary and shadow rays through coray and Embree, ray by ray; a diff
     /// image; exits with status 1 when any ray disagrees beyond a documented tie.
@@ -250,8 +260,30 @@ fn run(command: Command, opts: &Options) -> Result<(), String> {
             json,
             table,
             max_res,
+            max_size,
+            plot,
         } => {
             let params = kdbuild::preset(&preset)?;
+            if table.as_deref() == Some("bvh-series") {
+                let pts = series::run(res, max_size, &params, repeat)?;
+                if json {
+                    println!("{}", series::to_json(&pts));
+                } else {
+                    series::print(&pts, res);
+                    println!();
+                    for o in series::observations(&pts) {
+                        println!("{o}");
+                    }
+                }
+                if let Some(path) = plot {
+                    series::write_plot(&pts, &path, res)?;
+                    eprintln!("charts -> {}", path.display());
+                }
+                return Ok(());
+            }
+            if plot.is_some() || max_size.is_some() {
+                return Err("--plot and --max-size go with --table bvh-series".into());
+            }
             if let Some(table) = table {
                 return paper_table(&table, &scene, res, max_res, &params, repeat, json, opts);
             }

@@ -263,7 +263,7 @@ fn bench_bvh_table() {
         &d,
     );
     assert_eq!(code, 0, "{err}");
-    for m in ["tdbs", "tdbs-sah", "nn", "rtree", "rstar"] {
+    for m in ["tdbs", "tdbs-sah", "nn", "nn-chain", "rtree", "rstar"] {
         let line = out
             .lines()
             .find(|l| l.split_whitespace().next() == Some(m))
@@ -274,4 +274,69 @@ fn bench_bvh_table() {
         let cost_box: f64 = cells[4].parse().unwrap();
         assert!((2.0..=51.0).contains(&cost_box), "{line}");
     }
+}
+
+/// `--table bvh-series`: every ladder, every builder, exact against the
+/// kd-tree, the six observations judged, and the charts written as a PNG.
+#[test]
+fn bench_bvh_series_with_plot() {
+    let d = tmp("series");
+    let (code, out, err) = coray(
+        &[
+            "bench",
+            "--table",
+            "bvh-series",
+            "--res",
+            "24",
+            "--repeat",
+            "1",
+            "--max-size",
+            "2",
+            "--plot",
+            "series.png",
+        ],
+        &d,
+    );
+    assert_eq!(code, 0, "{err}");
+    for block in [
+        "\ntree\n",
+        "\ntree, floor split\n",
+        "\nballs\n",
+        "\ngears\n",
+    ] {
+        assert!(out.contains(block), "{block}: {out}");
+    }
+    // Tree sizes 1 and 2 have 7 and 15 objects; the split floor adds 255 pieces.
+    assert!(
+        out.contains("objects                                       7        15"),
+        "{out}"
+    );
+    assert!(
+        out.contains("objects                                     262       270"),
+        "{out}"
+    );
+    let mismatch_lines: Vec<&str> = out
+        .lines()
+        .filter(|l| l.starts_with("mismatches vs kd"))
+        .collect();
+    assert_eq!(mismatch_lines.len(), 4, "{out}");
+    for l in mismatch_lines {
+        assert!(l.split_whitespace().skip(4).all(|c| c == "0"), "{l}");
+    }
+    for k in 1..=6 {
+        let line = out
+            .lines()
+            .find(|l| l.starts_with(&format!("{k}. ")))
+            .unwrap_or_else(|| panic!("observation {k}: {out}"));
+        assert!(line.contains("confirmed"), "{line}");
+    }
+    let png = std::fs::read(d.join("series.png")).unwrap();
+    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+    assert!(png.len() > 20_000, "{} bytes", png.len());
+    let (code, _, err) = coray(&["bench", "spd:tree:2", "--plot", "x.png"], &d);
+    assert_eq!(code, 2);
+    assert!(
+        err.contains("--plot and --max-size go with --table bvh-series"),
+        "{err}"
+    );
 }
