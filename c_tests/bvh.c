@@ -171,11 +171,13 @@ static void rtree_insert_and_delete(void) {
     CorayRay *rays = malloc(n * sizeof *rays);
     CorayHit *want = malloc(n * sizeof *want);
     uint8_t *want_occ = malloc(n);
-    uint32_t b;
+    uint32_t v;
     rng_state = 43;
     ts = scene_random(1000, 0, 0, 1.0f);
     rays_random(rays, n, 1.0f);
-    for (b = CORAY_BVH_RTREE; b <= CORAY_BVH_RSTAR; b++) {
+    /* R-tree, R*-tree, R*-tree with forced reinsertion. */
+    for (v = 0; v < 3; v++) {
+        uint32_t b = v == 0 ? CORAY_BVH_RTREE : CORAY_BVH_RSTAR;
         CorayBvhParams p = coray_bvh_params_default(b);
         CorayBvhInfo info;
         CorayScene prefix = ts.view;
@@ -184,6 +186,7 @@ static void rtree_insert_and_delete(void) {
         CorayStatus s = CORAY_STATUS_OK;
         uint8_t was = 9;
         p.start_empty = 1;
+        p.forced_reinsert = v == 2;
         h = bvh_build(&ts.view, &p, 200);
         CHECK_STATUS(coray_bvh_info(h.arena, h.bytes, &info), CORAY_STATUS_OK);
         CHECK(info.object_count == 0 && info.capacity >= 200);
@@ -219,7 +222,8 @@ static void rtree_insert_and_delete(void) {
         /* A corrupt free-list count fails validation (header word 20: free node blocks). */
         ((uint32_t *)h.arena)[20] += 1;
         CHECK_STATUS(coray_bvh_validate(h.arena, h.bytes, &ts.view, NULL), CORAY_STATUS_CORRUPT_ARENA);
-        printf("%s: %u objects in an arena sized for 200, half deleted and reinserted\n", names[b], inserted);
+        printf("%s%s: %u objects in an arena sized for 200, half deleted and reinserted\n", names[b],
+               v == 2 ? " with forced reinsertion" : "", inserted);
         free(h.arena);
         free(h.scratch);
     }
@@ -245,6 +249,9 @@ static void bad_input(void) {
     CHECK_STATUS(coray_bvh_requirements(10, &p, &req), CORAY_STATUS_INVALID_PARAMETER);
     p = coray_bvh_params_default(CORAY_BVH_RTREE);
     p.insert_order = 7;
+    CHECK_STATUS(coray_bvh_requirements(10, &p, &req), CORAY_STATUS_INVALID_PARAMETER);
+    p = coray_bvh_params_default(CORAY_BVH_RSTAR);
+    p.forced_reinsert = 2;
     CHECK_STATUS(coray_bvh_requirements(10, &p, &req), CORAY_STATUS_INVALID_PARAMETER);
     p = coray_bvh_params_default(CORAY_BVH_NN);
     p.struct_size--;

@@ -111,6 +111,8 @@ typedef enum CorayStatus {
 typedef struct CorayBvhParams {
   // `sizeof(CorayBvhParams)`.
   size_t struct_size;
+  // R-trees: the shuffle's seed with `CORAY_BVH_ORDER_SHUFFLED`.
+  uint64_t seed;
   // `CORAY_BVH_TDBS`, `_TDBS_SAH`, `_NN`, `_NN_CHAIN`, `_RTREE` or `_RSTAR`.
   uint32_t builder;
   // TDBS builders: most primitives per leaf (at least 1; the thesis: 1).
@@ -125,8 +127,10 @@ typedef struct CorayBvhParams {
   // R-trees: 1 to build an empty tree (objects then enter by
   // [`coray_bvh_insert`]); 0 to insert every primitive.
   uint32_t start_empty;
-  // R-trees: the shuffle's seed with `CORAY_BVH_ORDER_SHUFFLED`.
-  uint64_t seed;
+  // R-trees: 1 for the R*-tree's forced reinsertion (the first overflow
+  // at a level during an insert reinserts 30% of the node's entries
+  // instead of splitting); 0, the default and the thesis' setting, splits.
+  uint32_t forced_reinsert;
 } CorayBvhParams;
 
 // Arena sizes for a hierarchy, from [`coray_bvh_requirements`].

@@ -249,6 +249,11 @@ pub const BVH_MAGIC: u32 = u32::from_le_bytes(*b"CRBV");
 /// Layout version of [`BvhArenaHeader`] and [`crate::bvh::BvhNode`].
 pub const BVH_VERSION: u32 = 1;
 
+/// [`BvhArenaHeader::rtree_flags`]: the R*-tree's rules.
+pub const BVH_FLAG_RSTAR: u32 = 1;
+/// [`BvhArenaHeader::rtree_flags`]: forced reinsertion.
+pub const BVH_FLAG_REINSERT: u32 = 2;
+
 /// Where the parts of a hierarchy arena lie: `[header | nodes | refs]`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct BvhArenaLayout {
@@ -335,8 +340,8 @@ pub struct BvhArenaHeader {
     pub max_children: u32,
     /// See `max_children`.
     pub min_children: u32,
-    /// R-trees: 1 for the R*-tree's rules, else 0.
-    pub rstar: u32,
+    /// R-trees: [`BVH_FLAG_RSTAR`] and [`BVH_FLAG_REINSERT`].
+    pub rtree_flags: u32,
     /// R-trees: free lists and counts.
     pub rtree: crate::bvh::RTreeState,
     /// Bytes of the arena the layout covers.

@@ -104,6 +104,19 @@ fn rtree_params() -> Vec<(String, RTreeParams)> {
                         max_children: big,
                         min_children: small,
                         order,
+                        forced_reinsert: false,
+                    },
+                ));
+            }
+            for (big, small) in [(4, 2), (8, 3), (32, 12)] {
+                v.push((
+                    format!("{split:?}/{order:?}/M{big}m{small}/reinsert"),
+                    RTreeParams {
+                        split,
+                        max_children: big,
+                        min_children: small,
+                        order,
+                        forced_reinsert: true,
                     },
                 ));
             }
@@ -247,6 +260,29 @@ fn nn_chain_makes_the_quadratic_joins() {
     );
 }
 
+/// Forced reinsertion changes the tree (it is not a no-op) and keeps it
+/// exact; a tree built with it holds the same objects.
+#[test]
+fn forced_reinsertion_changes_the_tree() {
+    let mut rng = Rng(12);
+    let o = random_scene(&mut rng, 800, 200, 0, 10.0);
+    let scene = o.scene();
+    let rays = random_rays(&mut rng, 500, 10.0);
+    let mut built = Vec::new();
+    for forced_reinsert in [false, true] {
+        let p = RTreeParams {
+            forced_reinsert,
+            ..RTreeParams::rstar()
+        };
+        let (mut nodes, mut refs) = (Vec::new(), Vec::new());
+        let t = build_rtree(&scene, p, &mut nodes, &mut refs);
+        t.validate().unwrap();
+        check(&t.bvh(), &rays, "reinsert", oracle_of(&scene));
+        built.push(joins(&t.bvh()));
+    }
+    assert_ne!(built[0], built[1]);
+}
+
 /// Static builds: exactly `requirements` succeeds, one node less fails
 /// with the slice and count needed.
 #[test]
@@ -278,7 +314,11 @@ fn rtree_insert_into_a_full_arena() {
     let mut rng = Rng(9);
     let o = random_scene(&mut rng, 600, 0, 0, 5.0);
     let scene = o.scene();
-    for p in [RTreeParams::rtree(), RTreeParams::rstar()] {
+    let reinsert = RTreeParams {
+        forced_reinsert: true,
+        ..RTreeParams::rstar()
+    };
+    for p in [RTreeParams::rtree(), RTreeParams::rstar(), reinsert] {
         let req = rtree_requirements(100, &p);
         let mut nodes = vec![BvhNode::default(); req.nodes];
         let mut refs = vec![0u32; req.refs];
@@ -329,7 +369,11 @@ fn rtree_delete_and_reinsert() {
     let scene = o.scene();
     let n = scene.prim_count() as u32;
     let rays = random_rays(&mut rng, 300, 5.0);
-    for p in [RTreeParams::rtree(), RTreeParams::rstar()] {
+    let reinsert = RTreeParams {
+        forced_reinsert: true,
+        ..RTreeParams::rstar()
+    };
+    for p in [RTreeParams::rtree(), RTreeParams::rstar(), reinsert] {
         let (mut nodes, mut refs) = (Vec::new(), Vec::new());
         let mut t = build_rtree(&scene, p, &mut nodes, &mut refs);
         let mut orphans = vec![0u32; n as usize];

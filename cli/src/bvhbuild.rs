@@ -7,7 +7,15 @@ use coray::{Aabb, Scene};
 use std::time::Instant;
 
 /// The hierarchy methods, as `coray bench` names them.
-pub const METHODS: [&str; 6] = ["tdbs", "tdbs-sah", "nn", "nn-chain", "rtree", "rstar"];
+pub const METHODS: [&str; 7] = [
+    "tdbs",
+    "tdbs-sah",
+    "nn",
+    "nn-chain",
+    "rtree",
+    "rstar",
+    "rstar-reinsert",
+];
 
 /// A built hierarchy's memory and what the build took.
 pub struct OwnedBvh {
@@ -25,6 +33,10 @@ impl OwnedBvh {
         let rtree = match method {
             "rtree" => Some(RTreeParams::rtree()),
             "rstar" => Some(RTreeParams::rstar()),
+            "rstar-reinsert" => Some(RTreeParams {
+                forced_reinsert: true,
+                ..RTreeParams::rstar()
+            }),
             _ => None,
         };
         if let Some(p) = rtree {

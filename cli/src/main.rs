@@ -48,7 +48,7 @@ enum Command {
         #[arg(long)]
         res: Option<String>,
         /// Structure and traversal: kd, kd-rope, kd-paper, kd-paper-rope, or a
-        /// hierarchy: tdbs, tdbs-sah, nn, nn-chain, rtree, rstar.
+        /// hierarchy: tdbs, tdbs-sah, nn, nn-chain, rtree, rstar, rstar-reinsert.
         #[arg(long, default_value = "kd")]
         accel: String,
         /// Reflection and refraction depth.

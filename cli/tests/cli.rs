@@ -79,7 +79,7 @@ fn render_every_accel_from_an_nff_file() {
          f 1 1 1 1 0 0 0 1\np 4\n-3 -3 0\n3 -3 0\n3 3 0\n-3 3 0\nf 0.2 0.4 1 0.5 0.5 20 0.3 1.5\ns 0 0 1 1\nc 2 0 0 0.3 2 0 2 0.1\n",
     )
     .unwrap();
-    const ACCELS: [&str; 10] = [
+    const ACCELS: [&str; 11] = [
         "kd",
         "kd-rope",
         "kd-paper",
@@ -90,6 +90,7 @@ fn render_every_accel_from_an_nff_file() {
         "nn-chain",
         "rtree",
         "rstar",
+        "rstar-reinsert",
     ];
     for accel in ACCELS {
         let (code, out, err) = coray(
@@ -263,7 +264,15 @@ fn bench_bvh_table() {
         &d,
     );
     assert_eq!(code, 0, "{err}");
-    for m in ["tdbs", "tdbs-sah", "nn", "nn-chain", "rtree", "rstar"] {
+    for m in [
+        "tdbs",
+        "tdbs-sah",
+        "nn",
+        "nn-chain",
+        "rtree",
+        "rstar",
+        "rstar-reinsert",
+    ] {
         let line = out
             .lines()
             .find(|l| l.split_whitespace().next() == Some(m))

@@ -6,7 +6,8 @@ use crate::carve::{self, check_arena, slice_mut, slice_ref};
 use crate::types::{CorayHit, CorayRay, CorayScene, CorayTraceStats};
 use crate::{guard, CorayStatus};
 use coray::arena::{
-    BvhArenaHeader, BvhArenaLayout, BvhScratchLayout, BVH_HEADER_BYTES, BVH_MAGIC, BVH_VERSION,
+    BvhArenaHeader, BvhArenaLayout, BvhScratchLayout, BVH_FLAG_REINSERT, BVH_FLAG_RSTAR,
+    BVH_HEADER_BYTES, BVH_MAGIC, BVH_VERSION,
 };
 use coray::bvh::{
     self, Builder, Bvh, BvhNode, BvhStackItem, BvhStats, InsertOrder, RTree, RTreeParams, Split,
@@ -42,6 +43,8 @@ pub const CORAY_BVH_ORDER_SORTED: u32 = 2;
 pub struct CorayBvhParams {
     /// `sizeof(CorayBvhParams)`.
     pub struct_size: usize,
+    /// R-trees: the shuffle's seed with `CORAY_BVH_ORDER_SHUFFLED`.
+    pub seed: u64,
     /// `CORAY_BVH_TDBS`, `_TDBS_SAH`, `_NN`, `_NN_CHAIN`, `_RTREE` or `_RSTAR`.
     pub builder: u32,
     /// TDBS builders: most primitives per leaf (at least 1; the thesis: 1).
@@ -56,8 +59,10 @@ pub struct CorayBvhParams {
     /// R-trees: 1 to build an empty tree (objects then enter by
     /// [`coray_bvh_insert`]); 0 to insert every primitive.
     pub start_empty: u32,
-    /// R-trees: the shuffle's seed with `CORAY_BVH_ORDER_SHUFFLED`.
-    pub seed: u64,
+    /// R-trees: 1 for the R*-tree's forced reinsertion (the first overflow
+    /// at a level during an insert reinserts 30% of the node's entries
+    /// instead of splitting); 0, the default and the thesis' setting, splits.
+    pub forced_reinsert: u32,
 }
 
 /// Arena sizes for a hierarchy, from [`coray_bvh_requirements`].
@@ -143,13 +148,14 @@ pub extern "C" fn coray_bvh_params_default(builder: u32) -> CorayBvhParams {
         } else {
             0
         },
+        seed: 0,
         builder,
         leaf_size: 1,
         max_children: r.max_children,
         min_children: r.min_children,
         insert_order: CORAY_BVH_ORDER_SCENE,
         start_empty: 0,
-        seed: 0,
+        forced_reinsert: 0,
     }
 }
 
@@ -161,7 +167,10 @@ enum Kind {
 
 impl CorayBvhParams {
     fn to_core(self) -> Result<Kind, CorayStatus> {
-        if self.struct_size != size_of::<CorayBvhParams>() || self.start_empty > 1 {
+        if self.struct_size != size_of::<CorayBvhParams>()
+            || self.start_empty > 1
+            || self.forced_reinsert > 1
+        {
             return Err(CorayStatus::InvalidParameter);
         }
         let order = match self.insert_order {
@@ -176,6 +185,7 @@ impl CorayBvhParams {
                 max_children: self.max_children,
                 min_children: self.min_children,
                 order,
+                forced_reinsert: self.forced_reinsert == 1,
             };
             // Same rule as the core's: a zero-capacity requirement checks it.
             let bad = !(4..=bvh::MAX_CHILDREN).contains(&p.max_children)
@@ -418,7 +428,15 @@ fn put_rtree(h: &mut BvhArenaHeader, t: &RTree) {
     let p = t.params();
     h.max_children = p.max_children;
     h.min_children = p.min_children;
-    h.rstar = (p.split == Split::RStar) as u32;
+    h.rtree_flags = if p.split == Split::RStar {
+        BVH_FLAG_RSTAR
+    } else {
+        0
+    } | if p.forced_reinsert {
+        BVH_FLAG_REINSERT
+    } else {
+        0
+    };
     h.rtree = t.state();
     h.info = t.bvh().info;
 }
@@ -489,7 +507,7 @@ fn rtree_params(h: &BvhArenaHeader) -> Result<RTreeParams, CorayStatus> {
         return Err(CorayStatus::InvalidParameter);
     }
     Ok(RTreeParams {
-        split: if h.rstar == 1 {
+        split: if h.rtree_flags & BVH_FLAG_RSTAR != 0 {
             Split::RStar
         } else {
             Split::Quadratic
@@ -497,6 +515,7 @@ fn rtree_params(h: &BvhArenaHeader) -> Result<RTreeParams, CorayStatus> {
         max_children: h.max_children,
         min_children: h.min_children,
         order: InsertOrder::Scene,
+        forced_reinsert: h.rtree_flags & BVH_FLAG_REINSERT != 0,
     })
 }
 

@@ -25,8 +25,8 @@ pub enum Split {
     /// Guttman: least area enlargement (ties: smallest area), quadratic split.
     Quadratic,
     /// R*: least overlap enlargement just above the leaves, split axis by
-    /// margin, split index by overlap then area. No forced reinsertion
-    /// (the thesis ran without it).
+    /// margin, split index by overlap then area; forced reinsertion when
+    /// [`RTreeParams::forced_reinsert`] is set (the thesis ran without it).
     RStar,
 }
 
@@ -52,6 +52,12 @@ pub struct RTreeParams {
     pub min_children: u32,
     /// Insertion order of [`RTree::build`].
     pub order: InsertOrder,
+    /// Beckmann et al.'s forced reinsertion: the first time a node other
+    /// than the root overflows at a level during one insert, its 30% of
+    /// entries farthest from its centre are taken out and inserted again
+    /// (nearest first) instead of splitting it. Off by default, as in the
+    /// thesis; it applies to either split rule.
+    pub forced_reinsert: bool,
 }
 
 impl RTreeParams {
@@ -62,6 +68,7 @@ impl RTreeParams {
             max_children: 8,
             min_children: 3,
             order: InsertOrder::Scene,
+            forced_reinsert: false,
         }
     }
     /// The R*-tree with the same M and m.
@@ -535,6 +542,11 @@ impl<'a> RTree<'a> {
         let Some(pb) = self.scene.prim_bounds(prim as usize) else {
             return Ok(());
         };
+        if self.params.forced_reinsert && self.room_for_reinsertion() {
+            self.insert_reinserting(BvhNode::leaf(&pb, prim, 1));
+            self.state.len += 1;
+            return Ok(());
+        }
         let big = self.params.max_children;
         // Path from the root to the leaf, as slots.
         let mut path = [0u32; MAX_HEIGHT + 1];
@@ -600,6 +612,150 @@ impl<'a> RTree<'a> {
         }
         self.state.len += 1;
         Ok(())
+    }
+
+    /// Entries one forced reinsertion takes out: 30% of M (at least one).
+    fn reinsert_count(&self) -> usize {
+        (self.params.max_children as usize * 3 / 10).max(1)
+    }
+
+    /// Whether the free room covers the worst an insert with forced
+    /// reinsertion can need: every level but the root reinserts once, and
+    /// each entry placed may split nodes up to a new root. Without it the
+    /// insert splits plainly (and checks its exact needs), so an arena sized
+    /// by [`rtree_requirements`] still holds its capacity.
+    fn room_for_reinsertion(&self) -> bool {
+        let h = self.state.height as usize;
+        if h + 2 > MAX_HEIGHT {
+            return false;
+        }
+        let worst = (1 + self.reinsert_count() * h) * (h + 2);
+        let (nodes, refs) = self.room();
+        nodes >= worst && refs >= worst
+    }
+
+    /// Inserts `first` (an object entry) with forced reinsertion; entries
+    /// taken out wait on a stack with the height of the node they go in.
+    fn insert_reinserting(&mut self, first: Entry) {
+        // Each level but the root reinserts once, at most 30% of 32 entries.
+        const MAX_PENDING: usize = 1 + 9 * MAX_HEIGHT;
+        let mut pending = [(BvhNode::default(), 0u32); MAX_PENDING];
+        pending[0] = (first, 0);
+        let mut sp = 1;
+        let mut reinserted = [false; MAX_HEIGHT + 1];
+        while sp > 0 {
+            sp -= 1;
+            let (entry, height) = pending[sp];
+            let mut out = [BvhNode::default(); MAX_CHILDREN as usize];
+            let (n, at) = self.place(entry, height, &mut reinserted, &mut out);
+            // Farthest first onto the stack: the nearest is placed first.
+            for e in &out[..n] {
+                pending[sp] = (*e, at);
+                sp += 1;
+            }
+        }
+    }
+
+    /// Puts `entry` into a node `height` levels above the leaves (0: a
+    /// leaf), treating overflow the R* way: reinsertion once per level (the
+    /// taken entries go to `out`, farthest first; returns their count and
+    /// height), else a split, climbing while parents overflow.
+    fn place(
+        &mut self,
+        entry: Entry,
+        height: u32,
+        reinserted: &mut [bool; MAX_HEIGHT + 1],
+        out: &mut [Entry; MAX_CHILDREN as usize],
+    ) -> (usize, u32) {
+        let big = self.params.max_children;
+        let top = self.state.height;
+        let eb = entry.bounds();
+        let mut path = [0u32; MAX_HEIGHT + 1];
+        let mut depth = 0usize;
+        let mut slot = 0u32;
+        while top - depth as u32 > height {
+            let nd = self.nodes[slot as usize];
+            path[depth] = slot;
+            depth += 1;
+            slot = nd.first + self.choose_subtree(&nd, &eb);
+        }
+        path[depth] = slot;
+        let mut entry = entry;
+        let mut level = depth;
+        let mut taken = (0usize, 0u32);
+        loop {
+            let s = path[level];
+            let nd = self.nodes[s as usize];
+            if nd.len() < big {
+                self.put(nd.is_leaf(), nd.first + nd.len(), &entry);
+                self.nodes[s as usize].set_len(nd.len() + 1);
+                self.refit(s);
+                break;
+            }
+            let h = (top as usize - level) as u32;
+            if level > 0 && !reinserted[h as usize] {
+                reinserted[h as usize] = true;
+                taken = (self.take_farthest(s, &entry, out), h);
+                break;
+            }
+            let sibling = self.split(s, &entry);
+            if level == 0 {
+                let b = self.alloc_nodes().expect("room checked");
+                let old = self.nodes[0];
+                self.nodes[b as usize] = old;
+                self.nodes[b as usize + 1] = sibling;
+                let joint = old.bounds().union(&sibling.bounds());
+                self.nodes[0] = BvhNode::interior(&joint, b, 2);
+                self.state.height += 1;
+                break;
+            }
+            entry = sibling;
+            level -= 1;
+        }
+        for l in (0..level).rev() {
+            self.refit(path[l]);
+        }
+        taken
+    }
+
+    /// The full node in `slot` plus `extra`: keeps the entries nearest the
+    /// centre of their joint box, writes the [`RTree::reinsert_count`]
+    /// farthest to `out` (farthest first) and returns how many.
+    fn take_farthest(&mut self, slot: u32, extra: &Entry, out: &mut [Entry]) -> usize {
+        let nd = self.nodes[slot as usize];
+        let leaf = nd.is_leaf();
+        let n = nd.len() as usize + 1;
+        let mut e = [BvhNode::default(); MAX_CHILDREN as usize + 1];
+        for (i, x) in e.iter_mut().enumerate().take(n - 1) {
+            *x = if leaf {
+                let p = self.refs[(nd.first + i as u32) as usize];
+                BvhNode::leaf(&self.entry_box(true, nd.first, i as u32), p, 1)
+            } else {
+                self.nodes[(nd.first + i as u32) as usize]
+            };
+        }
+        e[n - 1] = *extra;
+        let all = e[..n].iter().fold(Aabb::EMPTY, |b, x| b.union(&x.bounds()));
+        let c = 0.5 * (all.min + all.max);
+        let dist = |x: &Entry| {
+            let b = x.bounds();
+            (0.5 * (b.min + b.max) - c).length_squared()
+        };
+        // Farthest first; ties by box, then by reference, for one order everywhere.
+        e[..n].sort_unstable_by(|a, b| {
+            dist(b)
+                .total_cmp(&dist(a))
+                .then(a.first.cmp(&b.first))
+                .then(a.count.cmp(&b.count))
+        });
+        let k = self.reinsert_count();
+        out[..k].copy_from_slice(&e[..k]);
+        for (i, x) in e[k..n].iter().enumerate() {
+            self.put(leaf, nd.first + i as u32, x);
+        }
+        self.nodes[slot as usize].set_len((n - k) as u32);
+        self.refit(slot);
+        k
     }
 
     fn put(&mut self, leaf: bool, at: u32, e: &Entry) {
