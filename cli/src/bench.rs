@@ -445,7 +445,7 @@ pub fn print_table(s: &SceneData, rows: &[Row]) {
     let embree = rows.iter().find(|r| r.method == "embree");
     print_workload(s, rows, "");
     println!(
-        "{:<10} {:>9} {:>11} {:>7} {:>9} {:>9} {:>7} {:>8} {:>6} {:>6} {:>9} {:>9} {:>5}",
+        "{:<14} {:>9} {:>11} {:>7} {:>9} {:>9} {:>7} {:>8} {:>6} {:>6} {:>9} {:>9} {:>5}",
         "method",
         "build ms",
         "arena B",
@@ -466,7 +466,7 @@ pub fn print_table(s: &SceneData, rows: &[Row]) {
         let eta = kd.map(|k| r.primary_s / k.primary_s);
         let vs_embree = embree.map(|e| r.primary_mrays() / e.primary_mrays());
         println!(
-            "{:<10} {:>9.1} {:>11} {:>7} {:>9.3} {:>9} {:>7} {:>8} {:>6} {:>6} {:>9} {:>9} {:>5}",
+            "{:<14} {:>9.1} {:>11} {:>7} {:>9.3} {:>9} {:>7} {:>8} {:>6} {:>6} {:>9} {:>9} {:>5}",
             r.method,
             r.build_ms,
             r.arena_bytes.map_or("-".into(), |b| b.to_string()),
@@ -549,7 +549,7 @@ pub fn to_json(s: &SceneData, rows: &[Row]) -> String {
 pub fn print_bvh_table(s: &SceneData, rows: &[Row]) {
     print_workload(s, rows, "; costs in the thesis' units");
     println!(
-        "{:<9} {:>12} {:>12} {:>14} {:>13} {:>13} {:>9}",
+        "{:<14} {:>12} {:>12} {:>14} {:>13} {:>13} {:>9}",
         "builder",
         "preproc ms",
         "trace s",
@@ -561,7 +561,7 @@ pub fn print_bvh_table(s: &SceneData, rows: &[Row]) {
     for r in rows {
         let opt = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{x:.2}"));
         println!(
-            "{:<9} {:>12.1} {:>12.3} {:>14} {:>13} {:>13} {:>9}",
+            "{:<14} {:>12.1} {:>12.3} {:>14} {:>13} {:>13} {:>9}",
             r.method,
             r.build_ms,
             r.primary_s + r.shadow_s,

@@ -125,6 +125,19 @@ impl Bvh<'_> {
         h
     }
 
+    /// In a leaf of several objects (an R-tree's entries), each object's
+    /// own box is a hierarchy object too, tested before the object as the
+    /// R-tree's search and the thesis do. (A leaf of one object is its box.)
+    #[inline]
+    fn entry_hit(&self, p: u32, r: &PreparedRay, t_max: f32, st: &mut BvhStats) -> bool {
+        let b = self.scene.prim_box(p as usize);
+        let node = BvhNode::leaf(&b, 0, 0);
+        let (t, cost) = box_test(&node, r, t_max);
+        st.box_tests += 1;
+        st.box_cost += cost;
+        t.is_some()
+    }
+
     /// The root's stack entry when the ray enters its box.
     #[inline]
     fn enter_root(&self, r: &PreparedRay, st: &mut BvhStats) -> Option<BvhStackItem> {
@@ -161,7 +174,11 @@ impl Bvh<'_> {
             st.trace.traversal_steps += 1;
             if n.is_leaf() {
                 st.trace.leaf_steps += 1;
+                let shared = n.len() > 1;
                 for &p in &self.refs[n.first as usize..(n.first + n.len()) as usize] {
+                    if shared && !self.entry_hit(p, &r, limit(&best), st) {
+                        continue;
+                    }
                     if let Some(h) = self.test_prim(p, &r, limit(&best), st) {
                         best = h;
                     }
@@ -207,7 +224,11 @@ impl Bvh<'_> {
             st.trace.traversal_steps += 1;
             if n.is_leaf() {
                 st.trace.leaf_steps += 1;
+                let shared = n.len() > 1;
                 for &p in &self.refs[n.first as usize..(n.first + n.len()) as usize] {
+                    if shared && !self.entry_hit(p, &r, r.t_max, st) {
+                        continue;
+                    }
                     if self.test_prim(p, &r, r.t_max, st).is_some() {
                         return true;
                     }

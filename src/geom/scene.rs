@@ -74,6 +74,25 @@ impl<'a> Scene<'a> {
         [v(t[0]), v(t[1]), v(t[2])]
     }
 
+    /// The box of primitive `prim`, known to be valid (a structure's
+    /// reference): [`Scene::prim_bounds`] without its checks.
+    #[inline]
+    pub(crate) fn prim_box(&self, prim: usize) -> Aabb {
+        let nt = self.triangles.len();
+        let ns = self.spheres.len();
+        if prim < nt {
+            let [a, b, c] = self.triangle(prim);
+            Aabb {
+                min: a.min(b).min(c),
+                max: a.max(b).max(c),
+            }
+        } else if prim < nt + ns {
+            self.spheres[prim - nt].bounds()
+        } else {
+            self.cones[prim - nt - ns].bounds()
+        }
+    }
+
     /// Bounds of primitive `prim` (global index), or `None` when it is
     /// degenerate (zero area, zero or negative radius, NaN or infinite).
     pub fn prim_bounds(&self, prim: usize) -> Option<Aabb> {
