@@ -23,6 +23,7 @@ pub mod kd;
 pub mod lcts;
 #[cfg(feature = "oracle")]
 pub mod oracle;
+pub mod proj;
 pub mod stats;
 
 pub use error::Error;

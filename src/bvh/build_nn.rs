@@ -38,6 +38,15 @@ pub fn build_nn<'a>(
     storage: BvhStorage<'a>,
     scratch: BvhScratch,
 ) -> Result<Bvh<'a>, Error> {
+    build(scene, None, storage, scratch)
+}
+
+pub(crate) fn build<'a>(
+    scene: &Scene<'a>,
+    source: Option<&[Aabb]>,
+    storage: BvhStorage<'a>,
+    scratch: BvhScratch,
+) -> Result<Bvh<'a>, Error> {
     let req = requirements(scene.prim_count(), Builder::Nn);
     check_storage(&req, &storage, &scratch)?;
     let BvhStorage { nodes, refs } = storage;
@@ -47,7 +56,7 @@ pub fn build_nn<'a>(
         links,
         clusters,
     } = scratch;
-    let n = gather(scene, boxes, refs)?;
+    let n = gather(scene, source, boxes, refs)?;
     for k in 0..n {
         clusters[k] = BvhNode::leaf(&boxes[refs[k] as usize], k as u32, 1);
     }

@@ -181,6 +181,15 @@ pub fn build_nn_chain<'a>(
     storage: BvhStorage<'a>,
     scratch: BvhScratch,
 ) -> Result<Bvh<'a>, Error> {
+    build(scene, None, storage, scratch)
+}
+
+pub(crate) fn build<'a>(
+    scene: &Scene<'a>,
+    source: Option<&[Aabb]>,
+    storage: BvhStorage<'a>,
+    scratch: BvhScratch,
+) -> Result<Bvh<'a>, Error> {
     let prims = scene.prim_count();
     let req = chain_requirements(prims);
     check_storage(&req, &storage, &scratch)?;
@@ -192,7 +201,7 @@ pub fn build_nn_chain<'a>(
         ..
     } = scratch;
     let (prim_boxes, index_boxes) = boxes.split_at_mut(prims);
-    let n = gather(scene, prim_boxes, refs)?;
+    let n = gather(scene, source, prim_boxes, refs)?;
     if n == 0 {
         nodes[0] = BvhNode::leaf(&Aabb::EMPTY, 0, 0);
         return Ok(binary(scene, nodes, refs, 1, 0, 0));

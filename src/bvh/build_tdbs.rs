@@ -45,6 +45,17 @@ pub fn build_tdbs<'a>(
     storage: BvhStorage<'a>,
     scratch: BvhScratch,
 ) -> Result<Bvh<'a>, Error> {
+    build(scene, None, builder, leaf_size, storage, scratch)
+}
+
+pub(crate) fn build<'a>(
+    scene: &Scene<'a>,
+    source: Option<&[Aabb]>,
+    builder: Builder,
+    leaf_size: u32,
+    storage: BvhStorage<'a>,
+    scratch: BvhScratch,
+) -> Result<Bvh<'a>, Error> {
     if matches!(builder, Builder::Nn | Builder::NnChain) {
         return Err(Error::InvalidParameter { name: "builder" });
     }
@@ -56,7 +67,7 @@ pub fn build_tdbs<'a>(
     let BvhStorage { nodes, refs } = storage;
     let boxes = &mut scratch.boxes[..];
     let suffix = &mut scratch.keys[..];
-    let n = gather(scene, boxes, refs)?;
+    let n = gather(scene, source, boxes, refs)?;
     let mut root_box = Aabb::EMPTY;
     for &p in &refs[..n] {
         root_box = root_box.union(&boxes[p as usize]);

@@ -14,7 +14,7 @@ mod build_nn_chain;
 mod build_tdbs;
 mod node;
 mod rtree;
-mod traverse;
+pub(crate) mod traverse;
 mod validate;
 
 pub use build_nn::build_nn;
@@ -93,10 +93,25 @@ pub fn build<'a>(
     storage: BvhStorage<'a>,
     scratch: BvhScratch,
 ) -> Result<Bvh<'a>, Error> {
+    build_over(scene, None, builder, leaf_size, storage, scratch)
+}
+
+/// [`build`] on `source` boxes (one per primitive; an empty box leaves the
+/// primitive out) instead of the primitives' own: the projection
+/// hierarchies build on 2D boxes this way. The nodes get the source's
+/// boxes; the caller refits them when it wants others.
+pub fn build_over<'a>(
+    scene: &Scene<'a>,
+    source: Option<&[Aabb]>,
+    builder: Builder,
+    leaf_size: u32,
+    storage: BvhStorage<'a>,
+    scratch: BvhScratch,
+) -> Result<Bvh<'a>, Error> {
     match builder {
-        Builder::Nn => build_nn(scene, storage, scratch),
-        Builder::NnChain => build_nn_chain(scene, storage, scratch),
-        b => build_tdbs(scene, b, leaf_size, storage, scratch),
+        Builder::Nn => build_nn::build(scene, source, storage, scratch),
+        Builder::NnChain => build_nn_chain::build(scene, source, storage, scratch),
+        b => build_tdbs::build(scene, source, b, leaf_size, storage, scratch),
     }
 }
 
@@ -208,16 +223,35 @@ pub(crate) fn check_storage(
 
 /// Boxes of the scene's non-degenerate primitives into `boxes`, their
 /// indices into `refs`; returns how many (degenerate ones are never hit
-/// and stay out of the hierarchy).
-pub(crate) fn gather(scene: &Scene, boxes: &mut [Aabb], refs: &mut [u32]) -> Result<usize, Error> {
+/// and stay out of the hierarchy). With `source`, its boxes stand in for
+/// the primitives' (an empty one leaves the primitive out).
+pub(crate) fn gather(
+    scene: &Scene,
+    source: Option<&[Aabb]>,
+    boxes: &mut [Aabb],
+    refs: &mut [u32],
+) -> Result<usize, Error> {
     if scene.prim_count() > u32::MAX as usize / 2 {
         return Err(Error::TooManyPrimitives {
             count: scene.prim_count(),
         });
     }
+    if let Some(src) = source {
+        if src.len() < scene.prim_count() {
+            return Err(Error::SliceTooSmall {
+                slice: "source boxes",
+                needed: scene.prim_count(),
+                got: src.len(),
+            });
+        }
+    }
     let mut n = 0;
     for (p, slot) in boxes.iter_mut().enumerate().take(scene.prim_count()) {
-        if let Some(b) = scene.prim_bounds(p) {
+        let b = match source {
+            Some(src) => Some(src[p]).filter(|b| !b.is_empty()),
+            None => scene.prim_bounds(p),
+        };
+        if let Some(b) = b {
             *slot = b;
             refs[n] = p as u32;
             n += 1;

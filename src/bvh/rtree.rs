@@ -195,6 +195,8 @@ pub struct RTree<'a> {
     refs: &'a mut [u32],
     params: RTreeParams,
     state: RTreeState,
+    /// Boxes standing in for the primitives' own (see [`RTree::build_over`]).
+    source: Option<&'a [Aabb]>,
 }
 
 /// Everything of an [`RTree`] besides its two slices and parameters: what a
@@ -284,6 +286,7 @@ impl<'a> RTree<'a> {
                 free_refs: NONE,
                 ..RTreeState::default()
             },
+            source: None,
         };
         let b = t.alloc_refs().expect("checked above");
         t.nodes[0] = BvhNode::leaf(&Aabb::EMPTY, b, 0);
@@ -300,11 +303,35 @@ impl<'a> RTree<'a> {
         refs: &'a mut [u32],
         order: &mut [u32],
     ) -> Result<RTree<'a>, Error> {
+        RTree::build_over(scene, None, params, nodes, refs, order)
+    }
+
+    /// [`RTree::build`] on `source` boxes (one per primitive; empty leaves
+    /// it out) instead of the primitives' own; later inserts and deletes
+    /// use them too. The projection hierarchies build on 2D boxes this way.
+    pub fn build_over(
+        scene: &Scene<'a>,
+        source: Option<&'a [Aabb]>,
+        params: RTreeParams,
+        nodes: &'a mut [BvhNode],
+        refs: &'a mut [u32],
+        order: &mut [u32],
+    ) -> Result<RTree<'a>, Error> {
         let mut t = RTree::new(scene, params, nodes, refs)?;
+        if let Some(src) = source {
+            if src.len() < scene.prim_count() {
+                return Err(Error::SliceTooSmall {
+                    slice: "source boxes",
+                    needed: scene.prim_count(),
+                    got: src.len(),
+                });
+            }
+        }
+        t.source = source;
         let mut n = 0;
         let mut bounds = Aabb::EMPTY;
         for p in 0..scene.prim_count() {
-            if let Some(b) = scene.prim_bounds(p) {
+            if let Some(b) = t.prim_box(p) {
                 if n == order.len() {
                     return Err(Error::SliceTooSmall {
                         slice: "order",
@@ -333,7 +360,7 @@ impl<'a> RTree<'a> {
             }
             InsertOrder::Sorted => {
                 let key = |p: u32| {
-                    let b = scene.prim_bounds(p as usize).unwrap_or(Aabb::EMPTY);
+                    let b = t.prim_box(p as usize).unwrap_or(Aabb::EMPTY);
                     (morton(0.5 * (b.min + b.max), bounds.min, bounds.max), p)
                 };
                 order.sort_unstable_by_key(|&p| key(p));
@@ -377,6 +404,7 @@ impl<'a> RTree<'a> {
             refs,
             params,
             state,
+            source: None,
         })
     }
 
@@ -388,6 +416,14 @@ impl<'a> RTree<'a> {
     /// [`validate_rtree`] of this tree.
     pub fn validate(&self) -> Result<super::BvhTreeStats, Error> {
         validate_rtree(&self.bvh(), &self.params, &self.state)
+    }
+
+    /// The box a primitive enters with, or `None` when it stays out.
+    fn prim_box(&self, p: usize) -> Option<Aabb> {
+        match self.source {
+            Some(src) => src.get(p).copied().filter(|b| !b.is_empty()),
+            None => self.scene.prim_bounds(p),
+        }
     }
 
     /// Objects in the tree.
@@ -487,7 +523,7 @@ impl<'a> RTree<'a> {
     fn entry_box(&self, leaf: bool, block: u32, i: u32) -> Aabb {
         if leaf {
             let p = self.refs[(block + i) as usize] as usize;
-            self.scene.prim_bounds(p).unwrap_or(Aabb::EMPTY)
+            self.prim_box(p).unwrap_or(Aabb::EMPTY)
         } else {
             self.nodes[(block + i) as usize].bounds()
         }
@@ -539,7 +575,7 @@ impl<'a> RTree<'a> {
         if prim as usize >= self.scene.prim_count() {
             return Err(Error::InvalidParameter { name: "prim" });
         }
-        let Some(pb) = self.scene.prim_bounds(prim as usize) else {
+        let Some(pb) = self.prim_box(prim as usize) else {
             return Ok(());
         };
         if self.params.forced_reinsert && self.room_for_reinsertion() {
@@ -833,7 +869,7 @@ impl<'a> RTree<'a> {
         }
         let Some(pb) = (prim as usize)
             .lt(&self.scene.prim_count())
-            .then(|| self.scene.prim_bounds(prim as usize))
+            .then(|| self.prim_box(prim as usize))
             .flatten()
         else {
             return Ok(false);

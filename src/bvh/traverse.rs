@@ -84,7 +84,7 @@ const FAR_SLACK: f32 = 1.0 + 4.0 * f32::EPSILON;
 /// that shows a miss), clipped to `[t_min, t_max]`: the entry distance and
 /// the cost.
 #[inline]
-fn box_test(n: &BvhNode, r: &PreparedRay, t_max: f32) -> (Option<f32>, u64) {
+pub(crate) fn box_test(n: &BvhNode, r: &PreparedRay, t_max: f32) -> (Option<f32>, u64) {
     let (mut t0, mut t1) = (r.t_min, t_max);
     let mut cost = 0;
     for a in 0..3 {
@@ -111,7 +111,13 @@ fn box_test(n: &BvhNode, r: &PreparedRay, t_max: f32) -> (Option<f32>, u64) {
 impl Bvh<'_> {
     /// Tests primitive `p` and charges its cost.
     #[inline]
-    fn test_prim(&self, p: u32, r: &PreparedRay, t_max: f32, st: &mut BvhStats) -> Option<Hit> {
+    pub(crate) fn test_prim(
+        &self,
+        p: u32,
+        r: &PreparedRay,
+        t_max: f32,
+        st: &mut BvhStats,
+    ) -> Option<Hit> {
         st.trace.prim_tests += 1;
         let h = self.scene.intersect_prim(p as usize, r, t_max);
         let geom = self.scene.geom_of(p as usize);
