@@ -35,6 +35,10 @@ pub struct Row {
     /// object (primary and shadow rays), and the trace time of both.
     pub cost_per_box: Option<f64>,
     pub cost_per_prim: Option<f64>,
+    /// Projection methods: preprocessing of the view, light and global
+    /// hierarchies (ms), and shadow rays timed in the uniform mode (s).
+    pub build_split: Option<[f64; 3]>,
+    pub shadow_uniform_s: Option<f64>,
 }
 
 impl Row {
@@ -50,9 +54,11 @@ impl Row {
     }
 }
 
-/// Camera rays through every pixel and one shadow ray per hit per light,
-/// all with unit directions (Embree's cones need them, see coray-embree).
-pub fn shadow_rays(s: &SceneData, reference: &[Hit]) -> Vec<Ray> {
+/// Camera rays through every pixel (and, by [`lit_shadow_rays`], one
+/// shadow ray per hit per light), all with unit directions (Embree's cones
+/// need them, see coray-embree).
+/// Shadow rays of the workload, each with the index of its light.
+pub fn lit_shadow_rays(s: &SceneData, reference: &[Hit]) -> Vec<(usize, Ray)> {
     let mut shadow = Vec::new();
     let primary = primary_rays(s);
     for (r, h) in primary.iter().zip(reference) {
@@ -60,11 +66,11 @@ pub fn shadow_rays(s: &SceneData, reference: &[Hit]) -> Vec<Ray> {
             continue;
         }
         let p = r.origin + r.dir * h.t;
-        for (l, _) in &s.mesh.lights {
+        for (i, (l, _)) in s.mesh.lights.iter().enumerate() {
             let d = *l - p;
             let len = d.length();
             if len > 0.0 {
-                shadow.push(Ray::new(p, d / len, 1e-4 * len.max(1.0), len));
+                shadow.push((i, Ray::new(p, d / len, 1e-4 * len.max(1.0), len)));
             }
         }
     }
@@ -244,6 +250,87 @@ pub fn run_bvh(
     })
 }
 
+/// Builds projection method `name` (camera, light planes, global 3D
+/// hierarchy) and traces the workload: primary rays through the camera's
+/// hierarchy, shadow rays through their light's planes (known origin; the
+/// uniform mode timed beside it).
+pub fn run_proj(
+    s: &SceneData,
+    name: &str,
+    primary: &[Ray],
+    shadow: &[(usize, Ray)],
+    repeat: usize,
+) -> Result<Traced, String> {
+    use crate::projbuild::{parse, ProjRig};
+    use coray::bvh::BvhStackItem;
+    use coray::proj::{lights::Light, ProjStats};
+    let m = parse(name).ok_or(format!("unknown projection method `{name}`"))?;
+    let scene = s.mesh.scene();
+    let bounds = (0..scene.prim_count())
+        .filter_map(|p| scene.prim_bounds(p))
+        .fold(coray::Aabb::EMPTY, |a, b| a.union(&b));
+    let lights: Vec<Light> = s
+        .mesh
+        .lights
+        .iter()
+        .map(|(p, _)| Light::Point(*p))
+        .collect();
+    let rig = ProjRig::build(&scene, &s.mesh.camera, &lights, &bounds, m)?;
+    let mut stack = vec![BvhStackItem::default(); rig.stack_len(scene)];
+    let mut pst = ProjStats::default();
+    let (primary_s, hits) = best_of(repeat, || {
+        pst = ProjStats::default();
+        primary
+            .iter()
+            .map(|r| rig.intersect(scene, r, &mut stack, &mut pst))
+            .collect::<Vec<_>>()
+    });
+    let mut sst = ProjStats::default();
+    let (shadow_s, shadowed) = best_of(repeat, || {
+        sst = ProjStats::default();
+        shadow
+            .iter()
+            .map(|(l, r)| rig.occluded(scene, r, Some(*l), &mut stack, &mut sst))
+            .collect::<Vec<_>>()
+    });
+    let (uniform_s, uniform) = best_of(repeat, || {
+        let mut st = ProjStats::default();
+        shadow
+            .iter()
+            .map(|(_, r)| rig.occluded(scene, r, None, &mut stack, &mut st))
+            .collect::<Vec<_>>()
+    });
+    let mut all = pst.bvh;
+    all.add(&sst.bvh);
+    let n = primary.len().max(1) as f64;
+    let uniform_diff = uniform
+        .iter()
+        .zip(&shadowed)
+        .filter(|(a, b)| a != b)
+        .count();
+    Ok(Traced {
+        row: Row {
+            method: name.to_string(),
+            build_ms: rig.view_ms + rig.light_ms + rig.global_ms,
+            primary_s,
+            shadow_s,
+            primary_rays: primary.len(),
+            shadow_rays: shadow.len(),
+            tspr: Some(pst.bvh.trace.traversal_steps as f64 / n),
+            isect_per_ray: Some(pst.bvh.trace.prim_tests as f64 / n),
+            cost_per_box: Some(all.cost_per_box()),
+            cost_per_prim: Some(all.cost_per_prim()),
+            build_split: Some([rig.view_ms, rig.light_ms, rig.global_ms]),
+            shadow_uniform_s: Some(uniform_s),
+            // Counted with the known-origin answers' below.
+            mismatches: uniform_diff,
+            ..Row::default()
+        },
+        hits,
+        shadowed,
+    })
+}
+
 /// Every method coray has (and Embree when built with it).
 pub fn all_methods() -> Vec<&'static str> {
     let mut m = vec!["kd", "kd-rope", "slcts1d", "slcts2d", "hlcts1d", "hlcts2d"];
@@ -264,21 +351,24 @@ pub fn bench(
     repeat: usize,
     with_shadow: bool,
 ) -> Result<Vec<Row>, String> {
+    let projection = crate::projbuild::methods();
     for m in methods {
-        if !all_methods().contains(&m.as_str()) {
+        if !all_methods().contains(&m.as_str()) && !projection.contains(m) {
             return Err(format!(
-                "unknown method `{m}` (have: {})",
-                all_methods().join(", ")
+                "unknown method `{m}` (have: {}, and proj-BUILDER-CRITERIA-SCHEME: {})",
+                all_methods().join(", "),
+                projection.join(", ")
             ));
         }
     }
     let primary = primary_rays(s);
-    let shadow = if with_shadow {
+    let lit = if with_shadow {
         let first = run_kd(s, params, Traversal::Hierarchical, "kd", &primary, &[], 1);
-        shadow_rays(s, &first.hits)
+        lit_shadow_rays(s, &first.hits)
     } else {
         Vec::new()
     };
+    let shadow: Vec<Ray> = lit.iter().map(|(_, r)| *r).collect();
     let reference = run_kd(
         s,
         params,
@@ -315,29 +405,39 @@ pub fn bench(
             #[cfg(feature = "embree")]
             "embree" => run_embree(s, &primary, &shadow, repeat),
             b if crate::bvhbuild::METHODS.contains(&b) => run_bvh(s, b, &primary, &shadow, repeat)?,
+            p if p.starts_with("proj-") => run_proj(s, p, &primary, &lit, repeat)?,
             _ => unreachable!("checked above"),
         };
+        let mismatches = total_mismatches(&traced, &reference, m == "embree", &primary);
         let mut row = traced.row;
-        let shadow_diff = traced
-            .shadowed
-            .iter()
-            .zip(&reference.shadowed)
-            .filter(|(a, b)| a != b)
-            .count();
-        row.mismatches = shadow_diff
-            + if m == "embree" {
-                embree_mismatches(&primary, &traced.hits, &reference.hits)
-            } else {
-                traced
-                    .hits
-                    .iter()
-                    .zip(&reference.hits)
-                    .filter(|(a, b)| !same_hit(a, b))
-                    .count()
-            };
+        row.mismatches = mismatches;
         rows.push(row);
     }
     Ok(rows)
+}
+
+/// A method's mismatches: those it counted itself (an LCTS scheme's
+/// pixels against hierarchical casting, a projection method's uniform
+/// against known-origin shadow answers), plus its hits and shadow answers
+/// that differ from the reference's.
+fn total_mismatches(traced: &Traced, reference: &Traced, embree: bool, primary: &[Ray]) -> usize {
+    let shadow = traced
+        .shadowed
+        .iter()
+        .zip(&reference.shadowed)
+        .filter(|(a, b)| a != b)
+        .count();
+    let hits = if embree {
+        embree_mismatches(primary, &traced.hits, &reference.hits)
+    } else {
+        traced
+            .hits
+            .iter()
+            .zip(&reference.hits)
+            .filter(|(a, b)| !same_hit(a, b))
+            .count()
+    };
+    traced.row.mismatches + shadow + hits
 }
 
 /// An LCTS image-casting scheme on the camera's primary rays. Its
@@ -570,5 +670,83 @@ pub fn print_bvh_table(s: &SceneData, rows: &[Row]) {
             opt(r.cost_per_prim),
             r.mismatches
         );
+    }
+}
+
+/// `--table proj`: per projection hierarchy x build criterion x scheme,
+/// the thesis' chapter 6 metrics, with the 3D hierarchies and the kd-tree
+/// of the same run above them.
+pub fn print_proj_table(s: &SceneData, rows: &[Row]) {
+    print_workload(
+        s,
+        rows,
+        "; shadow rays by their light's plane (known) and by asking every light (uniform)",
+    );
+    println!(
+        "{:<24} {:>8} {:>8} {:>8} {:>9} {:>9} {:>9} {:>8} {:>9} {:>9} {:>8}",
+        "method",
+        "view ms",
+        "light ms",
+        "glob ms",
+        "prim s",
+        "shad s",
+        "unif s",
+        "obj/ray",
+        "cost/hobj",
+        "cost/aobj",
+        "mismatch"
+    );
+    let opt = |v: Option<f64>, p: usize| v.map_or("-".to_string(), |x| format!("{x:.p$}"));
+    for r in rows {
+        let [v, l, g] = r.build_split.unwrap_or([r.build_ms, 0.0, 0.0]);
+        println!(
+            "{:<24} {:>8.1} {:>8.1} {:>8.1} {:>9.4} {:>9.4} {:>9} {:>8} {:>9} {:>9} {:>8}",
+            r.method,
+            v,
+            l,
+            g,
+            r.primary_s,
+            r.shadow_s,
+            opt(r.shadow_uniform_s, 4),
+            opt(r.isect_per_ray, 2),
+            opt(r.cost_per_box, 2),
+            opt(r.cost_per_prim, 2),
+            r.mismatches
+        );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn traced(mismatches: usize, hits: Vec<Hit>, shadowed: Vec<bool>) -> Traced {
+        Traced {
+            row: Row {
+                mismatches,
+                ..Row::default()
+            },
+            hits,
+            shadowed,
+        }
+    }
+
+    /// A method's own count (LCTS pixels, which come without per-ray hits)
+    /// survives; differing hits and shadow answers add to it. (It was once
+    /// overwritten, so LCTS rows showed 0 whatever their pixels said.)
+    #[test]
+    fn own_mismatches_are_kept_and_differences_added() {
+        let hit = |t: f32| Hit {
+            t,
+            geom_id: 0,
+            prim_id: 0,
+            ..Hit::MISS
+        };
+        let reference = traced(0, vec![hit(1.0), Hit::MISS], vec![true, false]);
+        let lcts = traced(3, Vec::new(), Vec::new());
+        assert_eq!(total_mismatches(&lcts, &reference, false, &[]), 3);
+        // Own 1, the second hit where the reference misses, the second shadow answer.
+        let bvh = traced(1, vec![hit(1.0), hit(2.0)], vec![true, true]);
+        assert_eq!(total_mismatches(&bvh, &reference, false, &[]), 1 + 1 + 1);
     }
 }

@@ -1,7 +1,7 @@
 //! `coray compare`: primary and shadow rays through coray and Embree in one
 //! process, ray by ray, with the cross-check's tie rules; a diff image.
 
-use crate::bench::{primary_rays, shadow_rays};
+use crate::bench::{lit_shadow_rays, primary_rays};
 use crate::kdbuild::OwnedKd;
 use crate::scene::SceneData;
 use coray::kd::{KdParams, Traversal};
@@ -60,7 +60,10 @@ pub fn compare(
         }
     }
     // Shadow rays from the points both agree on, one per light.
-    let shadow = shadow_rays(s, &mine);
+    let shadow: Vec<_> = lit_shadow_rays(s, &mine)
+        .into_iter()
+        .map(|(_, r)| r)
+        .collect();
     let mut owner = Vec::with_capacity(shadow.len());
     for (i, hit) in mine.iter().enumerate() {
         if hit.is_hit() {

@@ -9,6 +9,7 @@ mod bvhbuild;
 mod compare;
 mod kdbuild;
 mod plot;
+mod projbuild;
 mod render;
 mod scene;
 mod series;
@@ -48,7 +49,9 @@ enum Command {
         #[arg(long)]
         res: Option<String>,
         /// Structure and traversal: kd, kd-rope, kd-paper, kd-paper-rope, or a
-        /// hierarchy: tdbs, tdbs-sah, nn, nn-chain, rtree, rstar, rstar-reinsert.
+        /// hierarchy: tdbs, tdbs-sah, nn, nn-chain, rtree, rstar, rstar-reinsert,
+        /// or projection hierarchies proj-BUILDER-CRITERIA-SCHEME (BUILDER
+        /// tdbs|nn-chain|rtree|rstar, CRITERIA 2d|dummy, SCHEME 2d|3d|comb).
         #[arg(long, default_value = "kd")]
         accel: String,
         /// Reflection and refraction depth.
@@ -79,7 +82,9 @@ enum Command {
         #[arg(long)]
         json: bool,
         /// A paper's table instead of the method table: `bvh` (the thesis'
-        /// hierarchy metrics per builder on SCENE), `bvh-series` (thesis
+        /// hierarchy metrics per builder on SCENE), `proj` (its chapter 6
+        /// metrics per projection hierarchy, criterion and scheme, beside the
+        /// 3D hierarchies), `bvh-series` (thesis
         /// 6.3.1: tree 1-11 floor whole and split, balls 1-4, gears 1-4, with
         /// its observations checked; SCENE is ignored), `lcts` (Havran and
         /// Bittner's Table 2: SCENE may be a comma-separated list, or `spd:all`
@@ -240,14 +245,30 @@ fn run(command: Command, opts: &Options) -> Result<(), String> {
                     },
                     owned.build_ms,
                 )
+            } else if let Some(m) = projbuild::parse(&accel) {
+                let scene = s.mesh.scene();
+                let bounds = (0..scene.prim_count())
+                    .filter_map(|p| scene.prim_bounds(p))
+                    .fold(coray::Aabb::EMPTY, |a, b| a.union(&b));
+                let lights: Vec<coray::proj::lights::Light> = s
+                    .mesh
+                    .lights
+                    .iter()
+                    .map(|(p, _)| coray::proj::lights::Light::Point(*p))
+                    .collect();
+                let rig = projbuild::ProjRig::build(&scene, &s.mesh.camera, &lights, &bounds, m)?;
+                let ms = rig.view_ms + rig.light_ms + rig.global_ms;
+                out.render(&render::ProjShooter { rig: &rig, scene }, ms)
             } else if bvhbuild::METHODS.contains(&accel.as_str()) {
                 let owned = bvhbuild::OwnedBvh::build(&s.mesh.scene(), &accel)?;
                 let bvh = owned.bvh(s.mesh.scene());
                 out.render(&render::BvhShooter { bvh }, owned.build_ms)
             } else {
                 Err(format!(
-                    "unknown --accel `{accel}` (kd, kd-rope, kd-paper, kd-paper-rope, {})",
-                    bvhbuild::METHODS.join(", ")
+                    "unknown --accel `{accel}` (kd, kd-rope, kd-paper, kd-paper-rope, {}, or \
+                     proj-BUILDER-CRITERIA-SCHEME: {})",
+                    bvhbuild::METHODS.join(", "),
+                    projbuild::methods().join(", ")
                 ))
             }
         }
@@ -339,6 +360,22 @@ fn paper_table(
 ) -> Result<(), String> {
     let mut cols = Vec::new();
     let kind = match table {
+        "proj" => {
+            let s = load_square(scene, res, opts)?;
+            let mut methods = vec!["kd".to_string()];
+            methods.extend(projbuild::BUILDERS.iter().map(|m| m.to_string()));
+            methods.extend(projbuild::methods());
+            if cfg!(feature = "embree") {
+                methods.push("embree".into());
+            }
+            let rows = bench::bench(&s, &methods, params, repeat, true)?;
+            if json {
+                println!("{}", bench::to_json(&s, &rows));
+            } else {
+                bench::print_proj_table(&s, &rows);
+            }
+            return Ok(());
+        }
         "bvh" => {
             let s = load_square(scene, res, opts)?;
             let mut methods = vec!["kd".to_string()];

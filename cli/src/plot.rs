@@ -280,9 +280,7 @@ fn text_width(t: &str, s: i64) -> i64 {
 
 /// A short label for a tick value.
 fn tick_label(v: f64) -> String {
-    if v >= 1000.0 {
-        format!("{:.0}", v)
-    } else if v >= 10.0 {
+    if v >= 10.0 {
         format!("{:.0}", v)
     } else if v >= 1.0 {
         format!("{:.1}", v)

@@ -73,6 +73,42 @@ impl Shooter for BvhShooter<'_> {
     }
 }
 
+/// Projection hierarchies: the camera's for primary rays, the lights'
+/// planes for shadow rays (uniform mode: the renderer does not say which
+/// light a ray is for), the global 3D hierarchy for the rest.
+pub struct ProjShooter<'a> {
+    pub rig: &'a crate::projbuild::ProjRig,
+    pub scene: coray::Scene<'a>,
+}
+
+impl Shooter for ProjShooter<'_> {
+    type Ctx = (Vec<BvhStackItem>, coray::proj::ProjStats);
+    fn ctx(&self) -> Self::Ctx {
+        (
+            vec![BvhStackItem::default(); self.rig.stack_len(self.scene)],
+            Default::default(),
+        )
+    }
+    fn intersect(&self, ray: &Ray, ctx: &mut Self::Ctx, st: &mut TraceStats) -> Hit {
+        ctx.1 = Default::default();
+        let h = self.rig.intersect(self.scene, ray, &mut ctx.0, &mut ctx.1);
+        st.add(&ctx.1.bvh.trace);
+        h
+    }
+    fn occluded(&self, ray: &Ray, ctx: &mut Self::Ctx, st: &mut TraceStats) -> bool {
+        ctx.1 = Default::default();
+        let o = self
+            .rig
+            .occluded(self.scene, ray, None, &mut ctx.0, &mut ctx.1);
+        st.add(&ctx.1.bvh.trace);
+        o
+    }
+    fn bounds(&self) -> Aabb {
+        let b = self.rig.global.bvh(self.scene);
+        b.nodes[b.info.root as usize].bounds()
+    }
+}
+
 /// What a render needs to trace rays.
 pub struct Tracer<'a, S: Shooter> {
     pub mesh: &'a SceneMesh,

@@ -79,7 +79,7 @@ fn render_every_accel_from_an_nff_file() {
          f 1 1 1 1 0 0 0 1\np 4\n-3 -3 0\n3 -3 0\n3 3 0\n-3 3 0\nf 0.2 0.4 1 0.5 0.5 20 0.3 1.5\ns 0 0 1 1\nc 2 0 0 0.3 2 0 2 0.1\n",
     )
     .unwrap();
-    const ACCELS: [&str; 11] = [
+    const ACCELS: [&str; 14] = [
         "kd",
         "kd-rope",
         "kd-paper",
@@ -91,6 +91,9 @@ fn render_every_accel_from_an_nff_file() {
         "rtree",
         "rstar",
         "rstar-reinsert",
+        "proj-rstar-2d-2d",
+        "proj-tdbs-dummy-comb",
+        "proj-nn-chain-2d-3d",
     ];
     for accel in ACCELS {
         let (code, out, err) = coray(
@@ -348,4 +351,43 @@ fn bench_bvh_series_with_plot() {
         err.contains("--plot and --max-size go with --table bvh-series"),
         "{err}"
     );
+}
+
+/// `--table proj`: every projection hierarchy x criterion x scheme, with
+/// 0 mismatches against the kd-tree for primary and shadow rays (and
+/// between the two shadow-ray modes), beside the 3D hierarchies.
+#[test]
+fn bench_proj_table() {
+    let d = tmp("proj");
+    let (code, out, err) = coray(
+        &[
+            "bench",
+            "spd:balls:2",
+            "--res",
+            "40",
+            "--repeat",
+            "1",
+            "--table",
+            "proj",
+        ],
+        &d,
+    );
+    assert_eq!(code, 0, "{err}");
+    let rows: Vec<&str> = out.lines().filter(|l| l.starts_with("proj-")).collect();
+    assert_eq!(rows.len(), 20, "{out}");
+    for l in out.lines().skip(2) {
+        let cells: Vec<&str> = l.split_whitespace().collect();
+        assert_eq!(cells.len(), 11, "{l}");
+        assert_eq!(cells[10], "0", "mismatches: {l}");
+        if cells[0].ends_with("-2d") && cells[0].starts_with("proj-") {
+            // Pure 2D traversal: every hierarchy test costs the thesis' 4.
+            assert_eq!(cells[8], "4.00", "{l}");
+        }
+    }
+    let (code, _, err) = coray(
+        &["bench", "spd:balls:1", "--methods", "proj-tdbs-dummy-3d"],
+        &d,
+    );
+    assert_eq!(code, 2);
+    assert!(err.contains("unknown method"), "{err}");
 }
