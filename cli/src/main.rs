@@ -9,6 +9,7 @@ mod bvhbuild;
 mod compare;
 mod kdbuild;
 mod plot;
+mod proj_series;
 mod projbuild;
 mod render;
 mod scene;
@@ -84,7 +85,8 @@ enum Command {
         /// A paper's table instead of the method table: `bvh` (the thesis'
         /// hierarchy metrics per builder on SCENE), `proj` (its chapter 6
         /// metrics per projection hierarchy, criterion and scheme, beside the
-        /// 3D hierarchies), `bvh-series` (thesis
+        /// 3D hierarchies), `proj-series` (chapter 6 over the thesis' ladders,
+        /// its 6.4 conclusions checked; SCENE is ignored), `bvh-series` (thesis
         /// 6.3.1: tree 1-11 floor whole and split, balls 1-4, gears 1-4, with
         /// its observations checked; SCENE is ignored), `lcts` (Havran and
         /// Bittner's Table 2: SCENE may be a comma-separated list, or `spd:all`
@@ -95,10 +97,10 @@ enum Command {
         /// `--table lcts-res`: the largest resolution (Table 3 goes to 4096).
         #[arg(long, default_value_t = 4096)]
         max_res: u32,
-        /// `--table bvh-series`: leave out sizes above this one.
+        /// `--table bvh-series|proj-series`: leave out sizes above this one.
         #[arg(long)]
         max_size: Option<u32>,
-        /// `--table bvh-series`: also draw the series as charts in this PNG.
+        /// `--table bvh-series|proj-series`: also draw the series as charts in this PNG.
         #[arg(long)]
         plot: Option<PathBuf>,
     },
@@ -184,6 +186,7 @@ impl RenderOut<'_> {
             mesh: &s.mesh,
             shooter,
             max_depth: self.depth,
+            secondary: Default::default(),
         };
         let threads = self.threads;
         let t = std::time::Instant::now();
@@ -302,8 +305,23 @@ fn run(command: Command, opts: &Options) -> Result<(), String> {
                 }
                 return Ok(());
             }
+            if table.as_deref() == Some("proj-series") {
+                let pts = proj_series::run(res, max_size, &params, repeat)?;
+                proj_series::print(&pts, res);
+                println!();
+                for c in proj_series::conclusions(&pts) {
+                    println!("{c}");
+                }
+                if let Some(path) = plot {
+                    proj_series::write_plot(&pts, &path, res)?;
+                    eprintln!("charts -> {}", path.display());
+                }
+                return Ok(());
+            }
             if plot.is_some() || max_size.is_some() {
-                return Err("--plot and --max-size go with --table bvh-series".into());
+                return Err(
+                    "--plot and --max-size go with --table bvh-series or proj-series".into(),
+                );
             }
             if let Some(table) = table {
                 return paper_table(&table, &scene, res, max_res, &params, repeat, json, opts);

@@ -114,6 +114,8 @@ pub struct Tracer<'a, S: Shooter> {
     pub mesh: &'a SceneMesh,
     pub shooter: &'a S,
     pub max_depth: u32,
+    /// Reflection and refraction rays traced so far (all threads).
+    pub secondary: std::sync::atomic::AtomicU64,
 }
 
 const EPS: f32 = 1e-4;
@@ -194,7 +196,9 @@ impl<S: Shooter> Tracer<'_, S> {
                 c += *lc * (m.ks * s * light_scale);
             }
         }
-        if depth < self.max_depth {
+        if depth < self.max_depth && (m.ks > 0.0 || m.t > 0.0) {
+            let count = (m.ks > 0.0) as u64 + (m.t > 0.0) as u64;
+            self.secondary.fetch_add(count, Ordering::Relaxed);
             if m.ks > 0.0 {
                 let r = d - n * (2.0 * d.dot(n));
                 c += self.trace(&Ray::new(p, r, eps, f32::INFINITY), depth + 1, ctx, st) * m.ks;

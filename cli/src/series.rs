@@ -80,20 +80,26 @@ pub struct Point {
 }
 
 /// Times a one-thread render through `shooter`: (best seconds, rays).
-fn time_render<S: render::Shooter>(s: &scene::SceneData, shooter: &S, repeat: usize) -> (f64, u64) {
-    let tracer = Tracer {
-        mesh: &s.mesh,
-        shooter,
-        max_depth: RENDER_DEPTH,
-    };
-    let (mut best, mut rays) = (f64::INFINITY, 0);
+pub(crate) fn time_render<S: render::Shooter>(
+    s: &scene::SceneData,
+    shooter: &S,
+    repeat: usize,
+) -> (f64, u64, u64) {
+    let (mut best, mut rays, mut secondary) = (f64::INFINITY, 0, 0);
     for _ in 0..repeat.max(1) {
+        let tracer = Tracer {
+            mesh: &s.mesh,
+            shooter,
+            max_depth: RENDER_DEPTH,
+            secondary: Default::default(),
+        };
         let t = Instant::now();
         let (_, st) = render::render(&tracer, 1, false);
         best = best.min(t.elapsed().as_secs_f64());
         rays = st.rays;
+        secondary = tracer.secondary.into_inner();
     }
-    (best, rays)
+    (best, rays, secondary)
 }
 
 /// Runs every ladder (sizes above `max_size` left out) at `res` x `res`.
@@ -118,7 +124,7 @@ pub fn run(
             s.mesh.camera.height = res;
             let rows = bench::bench(&s, &methods, params, 1, true)?;
             for row in rows {
-                let (render_s, render_rays) = if row.method == "kd" {
+                let (render_s, render_rays, _) = if row.method == "kd" {
                     let owned = OwnedKd::build(&s.mesh.scene(), params)?;
                     let tree = owned.tree(s.mesh.scene());
                     let shooter = KdShooter {
@@ -217,7 +223,7 @@ pub fn print(pts: &[Point], res: u32) {
 }
 
 /// Slope of log(y) against log(x) by least squares: the growth rate.
-fn slope(v: &[(f64, f64)]) -> f64 {
+pub(crate) fn slope(v: &[(f64, f64)]) -> f64 {
     let n = v.len() as f64;
     let (lx, ly): (Vec<f64>, Vec<f64>) = v.iter().map(|&(x, y)| (x.ln(), y.ln())).unzip();
     let (mx, my) = (lx.iter().sum::<f64>() / n, ly.iter().sum::<f64>() / n);
@@ -226,7 +232,7 @@ fn slope(v: &[(f64, f64)]) -> f64 {
     cov / var.max(1e-12)
 }
 
-fn verdict(ok: bool) -> &'static str {
+pub(crate) fn verdict(ok: bool) -> &'static str {
     if ok {
         "confirmed"
     } else {

@@ -391,3 +391,52 @@ fn bench_proj_table() {
     assert_eq!(code, 2);
     assert!(err.contains("unknown method"), "{err}");
 }
+
+/// `--table proj-series`: every ladder and method exact against the
+/// kd-tree, the nine conclusions of the thesis' 6.4 judged, charts written.
+#[test]
+fn bench_proj_series_with_plot() {
+    let d = tmp("proj-series");
+    let (code, out, err) = coray(
+        &[
+            "bench",
+            "--table",
+            "proj-series",
+            "--res",
+            "16",
+            "--repeat",
+            "1",
+            "--max-size",
+            "1",
+            "--plot",
+            "proj.png",
+        ],
+        &d,
+    );
+    assert_eq!(code, 0, "{err}");
+    let ladders = [
+        "\ntree, 7 lights\n",
+        "\ntree, floor split, 7 lights\n",
+        "\ntree, 1 light\n",
+        "\nballs\n",
+        "\ngears\n",
+    ];
+    for l in ladders {
+        assert!(out.contains(l), "{l}: {out}");
+    }
+    let totals: Vec<&str> = out
+        .lines()
+        .filter(|l| l.contains("mismatches against the kd-tree"))
+        .collect();
+    assert_eq!(totals.len(), 5, "{out}");
+    assert!(totals.iter().all(|l| l.ends_with(": 0")), "{totals:?}");
+    for k in 1..=9 {
+        let line = out
+            .lines()
+            .find(|l| l.starts_with(&format!("{k}. ")))
+            .unwrap_or_else(|| panic!("conclusion {k}: {out}"));
+        assert!(line.contains("confirmed"), "{line}");
+    }
+    let png = std::fs::read(d.join("proj.png")).unwrap();
+    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+}
