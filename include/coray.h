@@ -56,6 +56,33 @@
 // HLCTS by 2D bisection, alternating axes.
 #define CORAY_SCHEME_HLCTS_2D 5
 
+// Structure built on the primitives' rectangles on the plane.
+#define CORAY_PROJ_CRITERIA_2D 0
+
+// "Dummy": a 3D structure whose nodes carry their children's rectangles.
+#define CORAY_PROJ_CRITERIA_DUMMY 1
+
+// Nodes tested by the ray's point in their rectangle (4 comparisons).
+#define CORAY_PROJ_SCHEME_2D 0
+
+// Nodes tested by the ray against their 3D box.
+#define CORAY_PROJ_SCHEME_3D 1
+
+// The rectangle first, the 3D box when the rectangle holds the point.
+#define CORAY_PROJ_SCHEME_COMBINATION 2
+
+// A central projection.
+#define CORAY_PLANE_PERSPECTIVE 0
+
+// A parallel projection.
+#define CORAY_PLANE_ORTHOGRAPHIC 1
+
+// A point light.
+#define CORAY_LIGHT_POINT 0
+
+// A directional light.
+#define CORAY_LIGHT_DIRECTIONAL 1
+
 // Build with SAH-driven termination (depth bound from N). Default.
 #define CORAY_KD_PRESET_AUTO 0
 
@@ -404,6 +431,77 @@ typedef struct CorayPatchResult {
   struct CorayTraceStats trace;
 } CorayPatchResult;
 
+// A projection plane. Get one from [`coray_proj_plane_camera`] or
+// [`coray_proj_light_planes`].
+typedef struct CorayProjPlane {
+  // `CORAY_PLANE_PERSPECTIVE` or `CORAY_PLANE_ORTHOGRAPHIC`.
+  uint32_t kind;
+  // Centre of projection (perspective).
+  float eye[3];
+  // First plane axis.
+  float right[3];
+  // Second plane axis.
+  float up[3];
+  // Direction of view (perspective) or of projection (orthographic).
+  float forward[3];
+} CorayProjPlane;
+
+// A light: a point light at `v`, or a directional light shining along `v`.
+typedef struct CorayLight {
+  // `CORAY_LIGHT_POINT` or `CORAY_LIGHT_DIRECTIONAL`.
+  uint32_t kind;
+  // Position or direction.
+  float v[3];
+} CorayLight;
+
+// Parameters of a projection build. Get them from [`coray_proj_params_default`].
+typedef struct CorayProjParams {
+  // `sizeof(CorayProjParams)`.
+  size_t struct_size;
+  // `CORAY_PROJ_CRITERIA_2D` or `CORAY_PROJ_CRITERIA_DUMMY`.
+  uint32_t criteria;
+  // The builder and its settings (`leaf_size` is 1 here; `start_empty`
+  // must be 0).
+  struct CorayBvhParams bvh;
+} CorayProjParams;
+
+// Arena sizes for a projection hierarchy, from [`coray_proj_requirements`].
+typedef struct CorayProjRequirements {
+  // The hierarchy's arena.
+  size_t proj_bytes;
+  // Build scratch.
+  size_t scratch_bytes;
+} CorayProjRequirements;
+
+// What a projection hierarchy holds (read from its arena header, O(1)).
+typedef struct CorayProjInfo {
+  // `CORAY_BVH_*`.
+  uint32_t builder;
+  // `CORAY_PROJ_CRITERIA_*`.
+  uint32_t criteria;
+  // Nodes in use.
+  uint32_t node_count;
+  // Primitives in the hierarchy (2D criteria leave out those that
+  // project to nothing).
+  uint32_t object_count;
+  // Levels below the root.
+  uint32_t depth;
+  // Bytes of traversal stack the trace calls need (4-byte aligned).
+  size_t stack_bytes;
+  // Bytes of the arena the layout covers.
+  size_t arena_bytes_used;
+  // The plane.
+  struct CorayProjPlane plane;
+} CorayProjInfo;
+
+// Work done by one projection trace call.
+typedef struct CorayProjStats {
+  // Rays, nodes, primitives and the thesis' costs (a 2D test costs 4).
+  struct CorayBvhStats bvh;
+  // How many of `bvh.box_tests` were point-in-rectangle tests.
+  uint64_t rect_tests;
+} CorayProjStats;
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
@@ -700,6 +798,123 @@ enum CorayStatus coray_kdtree_patch_visibility(const void *tree_arena,
                                                void *scratch,
                                                size_t scratch_bytes,
                                                struct CorayPatchResult *out);
+
+// The image plane of `camera`.
+//
+// # Safety
+// `camera` and `out` are NULL or valid pointers to their types.
+enum CorayStatus coray_proj_plane_camera(const struct CorayCamera *camera_in,
+                                         struct CorayProjPlane *out);
+
+// The planes of `light` for a scene inside `[bounds_min, bounds_max]`:
+// `*count` is 6 (a cube: the point light lies inside the box; face `k`
+// looks along +x, -x, +y, -y, +z, -z) or 1 (a point light outside it, a
+// directional light). `planes` holds 6 entries.
+//
+// # Safety
+// `light`, `bounds_min`, `bounds_max` are NULL or readable; `planes`
+// (6 entries) and `count` NULL or writable.
+enum CorayStatus coray_proj_light_planes(const struct CorayLight *light,
+                                         const float (*bounds_min)[3],
+                                         const float (*bounds_max)[3],
+                                         struct CorayProjPlane *planes,
+                                         uint32_t *count);
+
+// Which of `light`'s planes (from [`coray_proj_light_planes`] with the
+// same bounds) the shadow ray `ray` uses; `CORAY_STATUS_INVALID_PARAMETER`
+// when the ray does not run towards the light (ending at it or before).
+//
+// # Safety
+// Pointers NULL or valid for their types.
+enum CorayStatus coray_proj_light_plane_for(const struct CorayLight *light,
+                                            const float (*bounds_min)[3],
+                                            const float (*bounds_max)[3],
+                                            const struct CorayRay *ray,
+                                            uint32_t *plane_index);
+
+// Default parameters: `criteria` (`CORAY_PROJ_CRITERIA_*`) with `builder`
+// (`CORAY_BVH_*`) and its defaults. Unknown values give `struct_size` 0.
+struct CorayProjParams coray_proj_params_default(uint32_t criteria, uint32_t builder);
+
+// Arena sizes for a projection hierarchy over `prim_count` primitives.
+//
+// # Safety
+// `params` and `out` are NULL or valid pointers to their types.
+enum CorayStatus coray_proj_requirements(size_t prim_count,
+                                         const struct CorayProjParams *params,
+                                         struct CorayProjRequirements *out);
+
+// Builds the projection hierarchy of `scene` on `plane` into
+// `proj_arena` (exactly `proj_bytes` from [`coray_proj_requirements`] or
+// more), with `scratch_arena` as scratch. Arenas 16-byte aligned, not
+// overlapping; `CORAY_STATUS_ARENA_TOO_SMALL` reports the bytes needed.
+//
+// # Safety
+// Every pointer is NULL or valid for its documented size; the arenas are
+// not touched by anyone else during the call.
+enum CorayStatus coray_proj_build(const struct CorayScene *scene,
+                                  const struct CorayProjParams *params,
+                                  const struct CorayProjPlane *plane,
+                                  void *proj_arena,
+                                  size_t proj_bytes,
+                                  void *scratch_arena,
+                                  size_t scratch_bytes,
+                                  size_t *needed_bytes);
+
+// What the hierarchy in `proj_arena` holds (O(1)).
+//
+// # Safety
+// `proj_arena` is valid for reads of `proj_bytes`; `out` NULL or writable.
+enum CorayStatus coray_proj_info(const void *proj_arena,
+                                 size_t proj_bytes,
+                                 struct CorayProjInfo *out);
+
+// Checks the hierarchy against `scene` (O(size)): the 3D side as
+// [`crate::coray_bvh_validate`] does, every rectangle the union of its
+// entries', every primitive's the projection of its box.
+//
+// # Safety
+// As [`coray_proj_info`]; `scene` is valid.
+enum CorayStatus coray_proj_validate(const void *proj_arena,
+                                     size_t proj_bytes,
+                                     const struct CorayScene *scene);
+
+// Closest hits of `count` rays by `scheme_id` (`CORAY_PROJ_SCHEME_*`).
+// Every ray must lie on a line through the plane's eye: a camera ray that
+// starts at the eye, or a ray towards the eye that ends at it or before
+// (for an orthographic plane: against its direction). Otherwise nothing is
+// written and the status is `CORAY_STATUS_INVALID_PARAMETER`: trace such
+// rays through a 3D hierarchy. `stack` as for [`crate::coray_bvh_intersect`].
+//
+// # Safety
+// As [`crate::coray_bvh_intersect`].
+enum CorayStatus coray_proj_intersect(const void *proj_arena,
+                                      size_t proj_bytes,
+                                      const struct CorayScene *scene,
+                                      uint32_t scheme_id,
+                                      const struct CorayRay *rays,
+                                      struct CorayHit *hits,
+                                      size_t count,
+                                      void *stack_mem,
+                                      size_t stack_bytes,
+                                      struct CorayProjStats *stats);
+
+// Any-hit queries (shadow rays towards the plane's light), as
+// [`coray_proj_intersect`]: `occluded[i]` is 1 when something lies on
+// `rays[i]` within `[tnear, tfar]`.
+//
+// # Safety
+// As [`coray_proj_intersect`], with `occluded` holding `count` bytes.
+enum CorayStatus coray_proj_occluded(const void *proj_arena,
+                                     size_t proj_bytes,
+                                     const struct CorayScene *scene,
+                                     uint32_t scheme_id,
+                                     const struct CorayRay *rays,
+                                     uint8_t *occluded,
+                                     size_t count,
+                                     void *stack_mem,
+                                     size_t stack_bytes,
+                                     struct CorayProjStats *stats);
 
 // An empty scene with `struct_size` set.
 struct CorayScene coray_scene_default(void);

@@ -386,3 +386,152 @@ impl BvhArenaHeader {
         Ok(l)
     }
 }
+
+/// Bytes reserved for the header at the start of a projection arena.
+pub const PROJ_HEADER_BYTES: usize = 128;
+/// Magic word of a projection arena: "CRPJ".
+pub const PROJ_MAGIC: u32 = u32::from_le_bytes(*b"CRPJ");
+/// Layout version of [`ProjArenaHeader`] and [`crate::proj::Rect`].
+pub const PROJ_VERSION: u32 = 1;
+
+/// Where the parts of a projection arena lie:
+/// `[header | nodes | refs | rects | prim_rects]`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ProjArenaLayout {
+    /// Node slots (and node rectangles).
+    pub nodes: usize,
+    /// Reference slots.
+    pub refs: usize,
+    /// Primitive rectangles.
+    pub prim_rects: usize,
+    /// Offset of the nodes.
+    pub nodes_offset: usize,
+    /// Offset of the references.
+    pub refs_offset: usize,
+    /// Offset of the node rectangles.
+    pub rects_offset: usize,
+    /// Offset of the primitive rectangles.
+    pub prim_rects_offset: usize,
+    /// Bytes the layout covers.
+    pub total_bytes: usize,
+}
+
+impl ProjArenaLayout {
+    /// The layout for these counts.
+    pub fn of(nodes: usize, refs: usize, prim_rects: usize) -> ProjArenaLayout {
+        const _: () = assert!(size_of::<ProjArenaHeader>() <= PROJ_HEADER_BYTES);
+        let rect = size_of::<crate::proj::Rect>();
+        let nodes_offset = PROJ_HEADER_BYTES;
+        let refs_offset =
+            nodes_offset + align_up(nodes.saturating_mul(size_of::<crate::bvh::BvhNode>()));
+        let rects_offset = refs_offset + align_up(refs.saturating_mul(4));
+        let prim_rects_offset = rects_offset + align_up(nodes.saturating_mul(rect));
+        let total_bytes =
+            prim_rects_offset.saturating_add(align_up(prim_rects.saturating_mul(rect)));
+        ProjArenaLayout {
+            nodes,
+            refs,
+            prim_rects,
+            nodes_offset,
+            refs_offset,
+            rects_offset,
+            prim_rects_offset,
+            total_bytes,
+        }
+    }
+}
+
+/// The header at the start of a projection arena.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C)]
+pub struct ProjArenaHeader {
+    /// [`PROJ_MAGIC`].
+    pub magic: u32,
+    /// [`PROJ_VERSION`].
+    pub version: u32,
+    /// The builder (the C ABI's `CORAY_BVH_*` numbers).
+    pub builder: u32,
+    /// 0: built on the rectangles; 1: dummy (3D structure).
+    pub criteria: u32,
+    /// Triangles, spheres and cones of the scene built on.
+    pub scene_counts: [u32; 3],
+    /// Shape of the hierarchy.
+    pub info: crate::bvh::BvhInfo,
+    /// 0: perspective; 1: orthographic.
+    pub plane_kind: u32,
+    /// The plane: eye, right, up, forward (eye unused when orthographic).
+    pub plane: [f32; 12],
+    /// Bytes of the arena the layout covers.
+    pub layout_bytes: u32,
+    /// Node slots.
+    pub nodes_cap: u32,
+    /// Reference slots.
+    pub refs_cap: u32,
+    /// Primitive rectangles.
+    pub prim_rects_cap: u32,
+}
+
+impl ProjArenaHeader {
+    /// The plane the header records.
+    pub fn plane(&self) -> crate::proj::ProjPlane {
+        let v = |i: usize| crate::Vec3::new(self.plane[i], self.plane[i + 1], self.plane[i + 2]);
+        if self.plane_kind == 1 {
+            crate::proj::ProjPlane::Orthographic {
+                right: v(3),
+                up: v(6),
+                forward: v(9),
+            }
+        } else {
+            crate::proj::ProjPlane::Perspective {
+                eye: v(0),
+                right: v(3),
+                up: v(6),
+                forward: v(9),
+            }
+        }
+    }
+
+    /// Records `p`.
+    pub fn set_plane(&mut self, p: &crate::proj::ProjPlane) {
+        let (eye, kind) = match *p {
+            crate::proj::ProjPlane::Perspective { eye, .. } => (eye, 0),
+            crate::proj::ProjPlane::Orthographic { .. } => (crate::Vec3::ZERO, 1),
+        };
+        let (r, u, f) = p.axes();
+        self.plane_kind = kind;
+        for (i, v) in [eye, r, u, f].iter().enumerate() {
+            self.plane[3 * i..3 * i + 3].copy_from_slice(&v.to_array());
+        }
+    }
+
+    /// Checks magic, version and layout (O(1)), as [`BvhArenaHeader::layout`].
+    pub fn layout(&self, arena_bytes: usize) -> Result<ProjArenaLayout, crate::Error> {
+        let corrupt = |what| Err(crate::Error::Corrupt { what });
+        if self.magic != PROJ_MAGIC {
+            return corrupt("magic");
+        }
+        if self.version != PROJ_VERSION {
+            return corrupt("version");
+        }
+        if self.plane_kind > 1 || self.criteria > 1 || !self.plane.iter().all(|x| x.is_finite()) {
+            return corrupt("plane or criteria");
+        }
+        let l = ProjArenaLayout::of(
+            self.nodes_cap as usize,
+            self.refs_cap as usize,
+            self.prim_rects_cap as usize,
+        );
+        if l.total_bytes != self.layout_bytes as usize {
+            return corrupt("layout");
+        }
+        if l.total_bytes > arena_bytes {
+            return corrupt("arena shorter than its layout");
+        }
+        let i = &self.info;
+        if i.root >= self.nodes_cap || i.node_count > self.nodes_cap || i.ref_count > self.refs_cap
+        {
+            return corrupt("counts");
+        }
+        Ok(l)
+    }
+}

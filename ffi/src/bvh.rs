@@ -160,13 +160,13 @@ pub extern "C" fn coray_bvh_params_default(builder: u32) -> CorayBvhParams {
 }
 
 /// A checked copy of the caller's parameters.
-enum Kind {
+pub(crate) enum Kind {
     Static(Builder, u32),
     RTree(RTreeParams),
 }
 
 impl CorayBvhParams {
-    fn to_core(self) -> Result<Kind, CorayStatus> {
+    pub(crate) fn to_core(self) -> Result<Kind, CorayStatus> {
         if self.struct_size != size_of::<CorayBvhParams>()
             || self.start_empty > 1
             || self.forced_reinsert > 1
@@ -217,7 +217,7 @@ impl CorayBvhParams {
 }
 
 /// Most primitives a hierarchy indexes, as for the kd-tree.
-const MAX_PRIMS: usize = 1 << 30;
+pub(crate) const MAX_PRIMS: usize = 1 << 30;
 
 /// The arena layout of an R-tree for `capacity` objects.
 fn rtree_layout(capacity: usize, p: &RTreeParams) -> BvhArenaLayout {
@@ -299,7 +299,7 @@ pub unsafe extern "C" fn coray_bvh_requirements(
 }
 
 /// Writes `bytes` to `*needed` when it is a usable pointer; the status.
-fn too_small(needed: *mut usize, bytes: usize) -> Result<(), CorayStatus> {
+pub(crate) fn too_small(needed: *mut usize, bytes: usize) -> Result<(), CorayStatus> {
     if !needed.is_null() && (needed as usize).is_multiple_of(core::mem::align_of::<usize>()) {
         // SAFETY: non-null and aligned; the caller promises it writable.
         unsafe { *needed = bytes };
@@ -415,7 +415,7 @@ pub unsafe extern "C" fn coray_bvh_build(
     })
 }
 
-fn scene_counts(s: &Scene) -> [u32; 3] {
+pub(crate) fn scene_counts(s: &Scene) -> [u32; 3] {
     [
         s.triangles.len() as u32,
         s.spheres.len() as u32,
@@ -717,7 +717,7 @@ pub unsafe extern "C" fn coray_bvh_delete(
 ///
 /// # Safety
 /// `stack` is NULL or valid for writes of `bytes` bytes during `'a`.
-unsafe fn stack<'a>(
+pub(crate) unsafe fn stack<'a>(
     t: &Bvh,
     stack: *mut c_void,
     bytes: usize,

@@ -33,6 +33,8 @@ unsafe impl Plain for coray::Aabb {}
 unsafe impl Plain for coray::bvh::BvhNode {}
 unsafe impl Plain for coray::bvh::BvhStackItem {}
 unsafe impl Plain for coray::arena::BvhArenaHeader {}
+unsafe impl Plain for coray::arena::ProjArenaHeader {}
+unsafe impl Plain for coray::proj::Rect {}
 
 const _: () = {
     assert!(size_of::<KdNode>() == 8 && align_of::<KdNode>() <= ARENA_ALIGN);
@@ -51,6 +53,8 @@ const _: () = {
     assert!(size_of::<coray::bvh::BvhNode>() == 32 && align_of::<coray::bvh::BvhNode>() == 4);
     assert!(size_of::<coray::bvh::BvhStackItem>() == 8);
     assert!(size_of::<coray::arena::BvhArenaHeader>() == 108);
+    assert!(size_of::<coray::arena::ProjArenaHeader>() == 120);
+    assert!(size_of::<coray::proj::Rect>() == 20 && align_of::<coray::proj::Rect>() == 4);
 };
 
 /// Checks an arena pointer: not null, aligned to [`ARENA_ALIGN`].

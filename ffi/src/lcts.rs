@@ -102,7 +102,7 @@ pub extern "C" fn coray_cast_params_default() -> CorayCastParams {
     }
 }
 
-fn camera(c: &CorayCamera) -> Result<Camera, CorayStatus> {
+pub(crate) fn camera(c: &CorayCamera) -> Result<Camera, CorayStatus> {
     let ok = c.struct_size == core::mem::size_of::<CorayCamera>()
         && (1..=1 << 15).contains(&c.width)
         && (1..=1 << 15).contains(&c.height)

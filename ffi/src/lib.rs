@@ -24,11 +24,13 @@ mod bvh;
 mod carve;
 mod kdtree;
 mod lcts;
+mod proj;
 mod types;
 
 pub use bvh::*;
 pub use kdtree::*;
 pub use lcts::*;
+pub use proj::*;
 pub use types::*;
 
 /// Status of every entry point. Numbers are fixed forever.

@@ -105,3 +105,8 @@ fn embree_crosscheck() {
 fn bvh_builders_insert_delete_and_errors() {
     assert!(run_program("bvh", &[]).contains("bvh: ok"));
 }
+
+#[test]
+fn projection_hierarchies_camera_lights_and_errors() {
+    assert!(run_program("proj", &[]).contains("proj: ok"));
+}
