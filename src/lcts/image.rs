@@ -121,7 +121,7 @@ pub fn image_requirements(
     history_capacity: usize,
 ) -> ImageRequirements {
     if let Some(levels) = bisection_levels(width, height, scheme) {
-        let slots = 4 + 2 * levels;
+        let slots = bisection_slots(levels);
         let per_cut = MAX_RAYS * history_capacity;
         return ImageRequirements {
             records: slots * history_capacity,
@@ -147,6 +147,12 @@ pub fn image_requirements(
         starts: 0,
         hlcts: 0,
     }
+}
+
+/// History slots of a bisection `levels` deep: the four first corners, and
+/// up to four rays traced per level (2D: two on each half's new edge).
+fn bisection_slots(levels: usize) -> usize {
+    4 + 4 * levels
 }
 
 /// Levels of bisection of an HLCTS scheme (None for the others).
@@ -517,22 +523,55 @@ impl<F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, F> {
         if !can_x && !can_y {
             return;
         }
-        // Corners: 0 (x0, y0), 1 (x1, y0), 2 (x0, y1), 3 (x1, y1). A split
-        // traces two rays, a and b, on the edges it cuts; each half keeps two
-        // old corners and takes a and b as the other two.
+        // Corners: 0 (x0, y0), 1 (x1, y0), 2 (x0, y1), 3 (x1, y1). The halves
+        // share no pixel ([x0, xm] and [xm + 1, x1], or the same in y), so
+        // every pixel is traced once: the first half takes rays a and b on
+        // its new edge, the second c and d on its own. A new corner on an old
+        // one's pixel (a half one pixel wide, a rectangle one pixel high) is
+        // that corner, not traced again.
         let split_x = can_x && (!can_y || depth % 2 == 0);
         let (xm, ym) = ((x0 + x1) / 2, (y0 + y1) / 2);
-        let (pa, pb, halves) = if split_x {
-            ((xm, y0), (xm, y1), [[x0, y0, xm, y1], [xm, y0, x1, y1]])
+        let (pa, pb, pc, pd, halves) = if split_x {
+            (
+                (xm, y0),
+                (xm, y1),
+                (xm + 1, y0),
+                (xm + 1, y1),
+                [[x0, y0, xm, y1], [xm + 1, y0, x1, y1]],
+            )
         } else {
-            ((x0, ym), (x1, ym), [[x0, y0, x1, ym], [x0, ym, x1, y1]])
+            (
+                (x0, ym),
+                (x1, ym),
+                (x0, ym + 1),
+                (x1, ym + 1),
+                [[x0, y0, x1, ym], [x0, ym + 1, x1, y1]],
+            )
         };
         let (a, free) = self.split_ray(pa.0, pa.1, &cut, free);
-        let (b, free) = self.split_ray(pb.0, pb.1, &cut, free);
-        let (first, second) = if split_x {
-            ([old(0), a, old(2), b], [a, old(1), b, old(3)])
+        let (b, free) = if pb == pa {
+            (a, free)
         } else {
-            ([old(0), old(1), a, b], [a, b, old(2), old(3)])
+            self.split_ray(pb.0, pb.1, &cut, free)
+        };
+        // The second half's near corners: old ones when it is one pixel thick.
+        let (far_1, far_2) = if split_x { (1, 3) } else { (2, 3) };
+        let on_old = if split_x { xm + 1 == x1 } else { ym + 1 == y1 };
+        let (c, d, free) = if on_old {
+            (old(far_1), old(far_2), free)
+        } else {
+            let (c, free) = self.split_ray(pc.0, pc.1, &cut, free);
+            let (d, free) = if pd == pc {
+                (c, free)
+            } else {
+                self.split_ray(pd.0, pd.1, &cut, free)
+            };
+            (c, d, free)
+        };
+        let (first, second) = if split_x {
+            ([old(0), a, old(2), b], [c, old(1), d, old(3)])
+        } else {
+            ([old(0), old(1), a, b], [c, d, old(2), old(3)])
         };
         self.halves(halves, [&first, &second], cut.as_slice(), depth, free);
     }
@@ -587,7 +626,7 @@ fn cast_bisection(
 ) -> Result<CastStats, Error> {
     let (w, h) = (camera.width, camera.height);
     let levels = bisection_levels(w, h, scheme).unwrap_or(1);
-    let slots = 4 + 2 * levels;
+    let slots = bisection_slots(levels);
     let cap = scratch.records.len() / slots;
     if cap == 0 {
         return Err(Error::SliceTooSmall {
