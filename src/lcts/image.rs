@@ -149,6 +149,10 @@ pub fn image_requirements(
     }
 }
 
+/// HLCTS-2D casts rectangles of at most this many pixels from their cut
+/// without splitting them (1D intervals always split down to two pixels).
+const LEAF_PIXELS: u32 = 16;
+
 /// History slots of a bisection `levels` deep: the four first corners, and
 /// up to four rays traced per level (2D: two on each half's new edge).
 fn bisection_slots(levels: usize) -> usize {
@@ -417,6 +421,9 @@ struct Bisection<'t, 'o, F: FnMut(u32, u32, &Hit)> {
     basis: (crate::Vec3, crate::Vec3, crate::Vec3),
     cap: usize,
     per_cut: usize,
+    /// Rectangles of at most this many pixels are cast from their cut
+    /// without splitting further.
+    leaf_pixels: u32,
     put: &'o mut F,
     st: CastStats,
 }
@@ -521,6 +528,28 @@ impl<F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, F> {
             return;
         }
         if !can_x && !can_y {
+            return;
+        }
+        // A small rectangle is not cut further: its other pixels are traced
+        // from this cut without histories (the cheap way, termination
+        // object included); recording them only pays when they bound a
+        // shaft of their own.
+        if (x1 - x0 + 1) * (y1 - y0 + 1) <= self.leaf_pixels {
+            let corner = |x: u32, y: u32| (x == x0 || x == x1) && (y == y0 || y == y1);
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    if !corner(x, y) {
+                        let hit = hlcts::trace(
+                            self.tree,
+                            &cut,
+                            &self.ray(x, y),
+                            None,
+                            &mut self.st.trace,
+                        );
+                        (self.put)(x, y, &hit);
+                    }
+                }
+            }
             return;
         }
         // Corners: 0 (x0, y0), 1 (x1, y0), 2 (x0, y1), 3 (x1, y1). The halves
@@ -662,6 +691,7 @@ fn cast_bisection(
         basis: camera.basis(),
         cap,
         per_cut,
+        leaf_pixels: LEAF_PIXELS,
         put: &mut put,
         st: CastStats::default(),
     };
