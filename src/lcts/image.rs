@@ -150,8 +150,10 @@ pub fn image_requirements(
 }
 
 /// HLCTS-2D casts rectangles of at most this many pixels from their cut
-/// without splitting them (1D intervals always split down to two pixels).
+/// without splitting them.
 const LEAF_PIXELS: u32 = 16;
+/// HLCTS-1D likewise for intervals.
+const LEAF_PIXELS_1D: u32 = 8;
 
 /// History slots of a bisection `levels` deep: the four first corners, and
 /// up to four rays traced per level (2D: two on each half's new edge).
@@ -514,6 +516,14 @@ impl<F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, F> {
         let can_y = y1 - y0 >= 2;
         if corners.len() == 2 {
             if !can_x {
+                return;
+            }
+            if x1 - x0 + 1 <= LEAF_PIXELS_1D {
+                for x in x0 + 1..x1 {
+                    let hit =
+                        hlcts::trace(self.tree, &cut, &self.ray(x, y0), None, &mut self.st.trace);
+                    (self.put)(x, y0, &hit);
+                }
                 return;
             }
             let xm = (x0 + x1) / 2;
