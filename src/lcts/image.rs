@@ -518,7 +518,7 @@ impl<F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, F> {
             if !can_x {
                 return;
             }
-            if x1 - x0 + 1 <= LEAF_PIXELS_1D {
+            if x1 - x0 < LEAF_PIXELS_1D {
                 for x in x0 + 1..x1 {
                     let hit =
                         hlcts::trace(self.tree, &cut, &self.ray(x, y0), None, &mut self.st.trace);
