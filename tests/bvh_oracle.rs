@@ -283,6 +283,35 @@ fn forced_reinsertion_changes_the_tree() {
     assert_ne!(built[0], built[1]);
 }
 
+/// Coincident copies (equal t): every hierarchy reports the lowest index,
+/// as the oracle does, whatever order it meets them in.
+#[test]
+fn ties_go_to_the_lowest_index() {
+    let mut o = OwnedScene::default();
+    for _ in 0..40 {
+        o.add_triangle(
+            coray::Vec3::new(-1.0, -1.0, 0.2),
+            coray::Vec3::new(1.0, -1.0, 0.0),
+            coray::Vec3::new(0.0, 1.0, -0.2),
+        );
+    }
+    let scene = o.scene();
+    let rays = random_rays(&mut Rng(6), 600, 1.0);
+    let mut hits = 0;
+    for b in STATIC {
+        let mut s = Static::new(scene.prim_count(), b, 0);
+        let bvh = s.build(&scene, b).unwrap();
+        let mut stack = vec![BvhStackItem::default(); bvh.stack_len()];
+        for r in &rays {
+            let want = oracle::intersect(&scene, r);
+            let got = bvh.intersect(r, &mut stack, &mut BvhStats::default());
+            assert_eq!((got.prim_id, got.t), (want.prim_id, want.t), "{b:?} {r:?}");
+            hits += got.is_hit() as usize;
+        }
+    }
+    assert!(hits > 200, "{hits}");
+}
+
 /// Static builds: exactly `requirements` succeeds, one node less fails
 /// with the slice and count needed.
 #[test]

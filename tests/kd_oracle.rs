@@ -129,6 +129,24 @@ fn coincident_primitives() {
     let mut rng = Rng(4);
     let rays = random_rays(&mut rng, 1000, 1.0);
     assert!(check_scene(&o, &rays, "coincident") > 100);
+    // Equal t: the lowest index wins, as the oracle (scene order) has it,
+    // whatever order a traversal meets the copies in.
+    let scene = o.scene();
+    for (_, params) in PRESETS {
+        let (req, mut b) = ideal_storage(&scene, &params);
+        let tree = build_with(&scene, &params, &req, &mut b);
+        for ray in &rays {
+            let want = oracle::intersect(&scene, ray);
+            for m in METHODS {
+                let got = tree.intersect(ray, m, &mut TraceStats::default());
+                assert_eq!(
+                    (got.geom_id, got.prim_id),
+                    (want.geom_id, want.prim_id),
+                    "{m:?} {ray:?}"
+                );
+            }
+        }
+    }
 }
 
 #[test]

@@ -196,6 +196,14 @@ pub fn print(table: Table, cols: &[Column]) {
                 .map(|c| c.row(m).map_or("-".into(), |r| r.mismatches.to_string()))
                 .collect(),
         );
+        if m.contains("lcts") {
+            line(
+                "ties",
+                cols.iter()
+                    .map(|c| c.row(m).map_or("-".into(), |r| r.ties.to_string()))
+                    .collect(),
+            );
+        }
     }
 }
 

@@ -5,6 +5,7 @@
 
 use super::{Bvh, BvhNode};
 use crate::geom::{Hit, PreparedRay, Ray, GEOM_SPHERES, GEOM_TRIANGLES};
+use crate::kd::traverse::tie_wins;
 use crate::TraceStats;
 
 /// Thesis 4.1.2: a slab costs 15 per axis (2 when the ray is parallel to
@@ -186,7 +187,9 @@ impl Bvh<'_> {
                         continue;
                     }
                     if let Some(h) = self.test_prim(p, &r, limit(&best), st) {
-                        best = h;
+                        if !best.is_hit() || h.t < best.t || tie_wins(&h, &best) {
+                            best = h;
+                        }
                     }
                 }
                 continue;

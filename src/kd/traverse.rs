@@ -58,11 +58,31 @@ impl LeafVisitor for Closest {
                 self.ray.t_max
             };
             if let Some(h) = scene.intersect_prim(p as usize, &self.ray, t_max) {
-                self.best = h;
+                if !self.best.is_hit() || h.t < self.best.t || tie_wins(&h, &self.best) {
+                    self.best = h;
+                }
             }
         }
-        self.best.is_hit() && self.best.t <= exit_t
+        // A hit on (or within rounding of) the leaf's far boundary may tie
+        // with one in the next leaf: stop only when it lies clearly inside.
+        self.best.is_hit() && inside_leaf(self.best.t, exit_t)
     }
+}
+
+/// Two primitives hit at exactly the same t: the lower global index wins
+/// (triangles, then spheres, then cones), so every traversal order, and so
+/// every structure, reports the same primitive.
+#[inline]
+pub(crate) fn tie_wins(h: &Hit, best: &Hit) -> bool {
+    h.t == best.t && (h.geom_id, h.prim_id) < (best.geom_id, best.prim_id)
+}
+
+/// Whether a hit at `t` lies clearly before a leaf's exit at `exit_t`, by
+/// more than the rounding of either (a few ulps, taken as 2^-19 of t): only
+/// then can no primitive of a later leaf be hit at the same t.
+#[inline]
+pub(crate) fn inside_leaf(t: f32, exit_t: f32) -> bool {
+    exit_t - t > t.abs() * (1.0 / 524_288.0)
 }
 
 /// Any hit: stops at the first.

@@ -358,10 +358,27 @@ pub fn trace(
     let mut hit_via_termination = false;
     if let (Some(o), None) = (h.termination, record.as_ref()) {
         v.tests += 1;
+        // Only a hit strictly inside the object's leaf: one on its far
+        // boundary may tie with a primitive of the next leaf.
+        let leaf_exit = h
+            .as_slice()
+            .iter()
+            .take(2)
+            .find(|e| e.flags & ENTRY_EMPTY_RUN == 0)
+            .and_then(|e| {
+                let bx = Aabb {
+                    min: Vec3::from(e.min),
+                    max: Vec3::from(e.max),
+                };
+                bx.clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max)
+            })
+            .map_or(f32::NEG_INFINITY, |(_, t1)| t1);
         if let Some(hit) = tree.scene.intersect_prim(o as usize, &r, ray.t_max) {
-            v.best = hit;
-            steps.leaves += h.as_slice().iter().take(2).count() as u64;
-            hit_via_termination = true;
+            if crate::kd::traverse::inside_leaf(hit.t, leaf_exit) {
+                v.best = hit;
+                steps.leaves += h.as_slice().iter().take(2).count() as u64;
+                hit_via_termination = true;
+            }
         }
     }
     if !hit_via_termination {

@@ -143,14 +143,26 @@ pub fn trace(tree: &KdTree, s: &Slcts, ray: &Ray, stats: &mut TraceStats) -> Hit
     let mut steps = Steps::default();
     if let Some(o) = s.termination {
         v.tests += 1;
-        if let Some(h) = tree.scene.intersect_prim(o as usize, &v.ray, ray.t_max) {
+        // Only a hit strictly inside the object's leaf: one on its far
+        // boundary may tie with a primitive of the next leaf.
+        let inside = |h: &Hit| {
+            s.entries[..s.len]
+                .iter()
+                .find(|&&e| e & EMPTY_RUN == 0)
+                .is_some_and(|&e| {
+                    let exit = tree.leaf_exit(&v.ray, tree.nodes[e as usize]).0;
+                    crate::kd::traverse::inside_leaf(h.t, exit)
+                })
+        };
+        let hit = tree.scene.intersect_prim(o as usize, &v.ray, ray.t_max);
+        if let Some(h) = hit.filter(inside) {
             stats.prim_tests += 1;
             // The leaves before C are empty: one step for them (unified), one for C.
             stats.leaf_steps += s.len.min(2) as u64;
             stats.traversal_steps += s.len.min(2) as u64;
             return h;
         }
-        // Rounding: fall through to the sequence.
+        // Rounding, or a hit on the leaf's boundary: the sequence decides.
     }
     let r = v.ray;
     let root = tree

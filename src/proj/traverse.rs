@@ -6,6 +6,7 @@ use super::{ProjHierarchy, Rect};
 use crate::bvh::traverse::box_test;
 use crate::bvh::{BvhNode, BvhStackItem, BvhStats};
 use crate::geom::{Hit, PreparedRay, Ray};
+use crate::kd::traverse::tie_wins;
 
 /// How a ray is tested against the hierarchy's nodes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -132,7 +133,9 @@ impl ProjHierarchy<'_> {
                         continue;
                     }
                     if let Some(h) = self.bvh.test_prim(p, r, limit(&best), &mut st.bvh) {
-                        best = h;
+                        if !best.is_hit() || h.t < best.t || tie_wins(&h, &best) {
+                            best = h;
+                        }
                     }
                 }
                 continue;
