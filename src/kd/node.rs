@@ -152,6 +152,31 @@ impl KdInfo {
         }
     }
 
+    /// The box every traversal clips rays to: the root box widened by
+    /// 2^-19 of its largest coordinate or extent. A primitive's own test
+    /// may report a hit point a few ulps outside the root box (a triangle
+    /// on the box's face, met at a slant); clipped to the exact box, the
+    /// ray's exit point can round onto the wrong side of a split near it,
+    /// and a traversal that classifies points would skip the leaf that
+    /// holds the hit. All traversals use this one box, so they still agree.
+    pub fn trace_bounds(&self) -> Aabb {
+        let b = self.bounds();
+        if b.is_empty() {
+            return b;
+        }
+        let m = b
+            .min
+            .abs()
+            .max(b.max.abs())
+            .max((b.max - b.min))
+            .max_element();
+        let e = Vec3::splat(m * (1.0 / 524_288.0));
+        Aabb {
+            min: b.min - e,
+            max: b.max + e,
+        }
+    }
+
     /// True when a capacity made the build stop splitting early.
     pub fn truncated(&self) -> bool {
         self.flags & KD_FLAG_TRUNCATED != 0

@@ -286,7 +286,7 @@ impl<'a> KdTree<'a> {
         let r = *v.ray();
         match self
             .info
-            .bounds()
+            .trace_bounds()
             .clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max)
         {
             Some((t0, t1)) => self.walk_from(v, rec, &mut new_stack(), 0, t0, t1, steps),
@@ -512,7 +512,7 @@ impl<'a> KdTree<'a> {
         let r = *v.ray();
         let Some((t0, t1)) = self
             .info
-            .bounds()
+            .trace_bounds()
             .clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max)
         else {
             return false;

@@ -167,7 +167,7 @@ pub fn trace(tree: &KdTree, s: &Slcts, ray: &Ray, stats: &mut TraceStats) -> Hit
     let r = v.ray;
     let root = tree
         .info
-        .bounds()
+        .trace_bounds()
         .clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max);
     let done = match root {
         None => true,
