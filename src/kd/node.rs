@@ -168,7 +168,7 @@ impl KdInfo {
             .min
             .abs()
             .max(b.max.abs())
-            .max((b.max - b.min))
+            .max(b.max - b.min)
             .max_element();
         let e = Vec3::splat(m * (1.0 / 524_288.0));
         Aabb {
