@@ -288,25 +288,25 @@ pub fn print(pts: &[Point], res: u32) {
             continue;
         }
         println!("\n{}", l.name);
-        print!("{:<26}", "size");
+        print!("{:<30}", "size");
         for s in &sz {
             print!("{s:>10}");
         }
-        print!("\n{:<26}", "objects");
+        print!("\n{:<30}", "objects");
         for s in &sz {
             print!(
                 "{:>10}",
                 find(pts, l.name, *s, &all[0]).map_or(0, |p| p.objects)
             );
         }
-        print!("\n{:<26}", "2D overlap");
+        print!("\n{:<30}", "2D overlap");
         for s in &sz {
             print!(
                 "{:>10.2}",
                 find(pts, l.name, *s, &all[0]).map_or(0.0, |p| p.overlap)
             );
         }
-        print!("\n{:<26}", "secondary per primary");
+        print!("\n{:<30}", "secondary per primary");
         for s in &sz {
             let v = find(pts, l.name, *s, &all[0]).map_or(0.0, |p| p.secondary_per_primary);
             print!("{v:>10.2}");
@@ -315,7 +315,7 @@ pub fn print(pts: &[Point], res: u32) {
         for (metric, get) in METRICS {
             println!("  {metric}");
             for m in &all {
-                print!("    {m:<22}");
+                print!("    {m:<26}");
                 for s in &sz {
                     match find(pts, l.name, *s, m).map(get) {
                         Some(v) if v >= 100.0 => print!("{v:>10.0}"),
