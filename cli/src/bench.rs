@@ -272,19 +272,10 @@ pub fn run_proj(
 ) -> Result<Traced, String> {
     use crate::projbuild::{parse, ProjRig};
     use coray::bvh::BvhStackItem;
-    use coray::proj::{lights::Light, ProjStats};
+    use coray::proj::ProjStats;
     let m = parse(name).ok_or(format!("unknown projection method `{name}`"))?;
     let scene = s.mesh.scene();
-    let bounds = (0..scene.prim_count())
-        .filter_map(|p| scene.prim_bounds(p))
-        .fold(coray::Aabb::EMPTY, |a, b| a.union(&b));
-    let lights: Vec<Light> = s
-        .mesh
-        .lights
-        .iter()
-        .map(|(p, _)| Light::Point(*p))
-        .collect();
-    let rig = ProjRig::build(&scene, &s.mesh.camera, &lights, &bounds, m)?;
+    let rig = ProjRig::for_scene(s, m)?;
     let mut stack = vec![BvhStackItem::default(); rig.stack_len(scene)];
     let mut pst = ProjStats::default();
     let (primary_s, hits) = best_of(repeat, || {

@@ -250,16 +250,7 @@ fn run(command: Command, opts: &Options) -> Result<(), String> {
                 )
             } else if let Some(m) = projbuild::parse(&accel) {
                 let scene = s.mesh.scene();
-                let bounds = (0..scene.prim_count())
-                    .filter_map(|p| scene.prim_bounds(p))
-                    .fold(coray::Aabb::EMPTY, |a, b| a.union(&b));
-                let lights: Vec<coray::proj::lights::Light> = s
-                    .mesh
-                    .lights
-                    .iter()
-                    .map(|(p, _)| coray::proj::lights::Light::Point(*p))
-                    .collect();
-                let rig = projbuild::ProjRig::build(&scene, &s.mesh.camera, &lights, &bounds, m)?;
+                let rig = projbuild::ProjRig::for_scene(&s, m)?;
                 let ms = rig.view_ms + rig.light_ms + rig.global_ms;
                 out.render(&render::ProjShooter { rig: &rig, scene }, ms)
             } else if bvhbuild::METHODS.contains(&accel.as_str()) {

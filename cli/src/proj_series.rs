@@ -12,54 +12,43 @@ use crate::plot::{self, Curve, Panel};
 use crate::projbuild::{self, ProjRig};
 use crate::render::{BvhShooter, ProjShooter};
 use crate::scene::{self, SceneData};
-use crate::series::{time_render, verdict};
+use crate::series::{time_render, verdict, Series};
 use coray::kd::KdParams;
-use coray::proj::lights::Light;
 use coray::Vec3;
 use coray_scenes::spd::Options;
 
-/// One ladder: a scene, its sizes, floor split and lights.
-pub struct Ladder {
-    pub name: &'static str,
-    pub scene: &'static str,
-    pub sizes: std::ops::RangeInclusive<u32>,
-    pub floor_split: u32,
-    /// Replace the scene's lights by this many inside its box (0: keep).
-    pub lights: usize,
-}
-
 /// The thesis' ladders. Its tree has 7 lights inside the scene volume; ours
 /// places 7 in the scene box (and 1 for the one-light ladder), as below.
-pub const LADDERS: [Ladder; 5] = [
-    Ladder {
+pub const LADDERS: [Series; 5] = [
+    Series {
         name: "tree, 7 lights",
         scene: "tree",
         sizes: 1..=11,
         floor_split: 1,
         lights: 7,
     },
-    Ladder {
+    Series {
         name: "tree, floor split, 7 lights",
         scene: "tree",
         sizes: 1..=11,
         floor_split: 16,
         lights: 7,
     },
-    Ladder {
+    Series {
         name: "tree, 1 light",
         scene: "tree",
         sizes: 1..=11,
         floor_split: 1,
         lights: 1,
     },
-    Ladder {
+    Series {
         name: "balls",
         scene: "balls",
         sizes: 1..=4,
         floor_split: 1,
         lights: 0,
     },
-    Ladder {
+    Series {
         name: "gears",
         scene: "gears",
         sizes: 1..=4,
@@ -135,12 +124,8 @@ pub fn run(
             let mut s = scene::load(&format!("spd:{}:{size}", l.scene), &opts)?;
             s.mesh.camera.width = res;
             s.mesh.camera.height = res;
-            let scene = s.mesh.scene();
-            let bounds = (0..scene.prim_count())
-                .filter_map(|p| scene.prim_bounds(p))
-                .fold(coray::Aabb::EMPTY, |a, b| a.union(&b));
             if l.lights > 0 {
-                s.mesh.lights = lights_inside(&bounds, l.lights);
+                s.mesh.lights = lights_inside(&s.mesh.scene().bounds(), l.lights);
             }
             let overlap = overlap(&s);
             let rows = bench::bench(&s, &methods, params, 1, true)?;
@@ -149,7 +134,7 @@ pub fn run(
                 if row.method == "kd" {
                     continue;
                 }
-                let (render_s, _, secondary) = render_time(&s, &row.method, &bounds, repeat)?;
+                let (render_s, _, secondary) = render_time(&s, &row.method, repeat)?;
                 let [view_ms, light_ms, global_ms] =
                     row.build_split.unwrap_or([0.0, 0.0, row.build_ms]);
                 out.push(Point {
@@ -178,21 +163,10 @@ pub fn run(
 
 /// A whole one-thread render through `method`: (best seconds, rays,
 /// secondary rays).
-fn render_time(
-    s: &SceneData,
-    method: &str,
-    bounds: &coray::Aabb,
-    repeat: usize,
-) -> Result<(f64, u64, u64), String> {
+fn render_time(s: &SceneData, method: &str, repeat: usize) -> Result<(f64, u64, u64), String> {
     let scene = s.mesh.scene();
     if let Some(m) = projbuild::parse(method) {
-        let lights: Vec<Light> = s
-            .mesh
-            .lights
-            .iter()
-            .map(|(p, _)| Light::Point(*p))
-            .collect();
-        let rig = ProjRig::build(&scene, &s.mesh.camera, &lights, bounds, m)?;
+        let rig = ProjRig::for_scene(s, m)?;
         Ok(time_render(s, &ProjShooter { rig: &rig, scene }, repeat))
     } else {
         let owned = crate::bvhbuild::OwnedBvh::build(&scene, method)?;

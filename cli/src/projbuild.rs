@@ -196,6 +196,19 @@ impl ProjRig {
         })
     }
 
+    /// [`ProjRig::build`] for a loaded scene: its camera, its point lights,
+    /// its primitives' bounds.
+    pub fn for_scene(s: &crate::scene::SceneData, m: ProjMethod) -> Result<ProjRig, String> {
+        let scene = s.mesh.scene();
+        let lights: Vec<Light> = s
+            .mesh
+            .lights
+            .iter()
+            .map(|(p, _)| Light::Point(*p))
+            .collect();
+        ProjRig::build(&scene, &s.mesh.camera, &lights, &scene.bounds(), m)
+    }
+
     /// Deepest stack any of its hierarchies needs.
     pub fn stack_len(&self, scene: Scene) -> usize {
         let mut d = self.camera.view(scene).bvh.stack_len();

@@ -24,6 +24,8 @@ pub struct Series {
     pub sizes: std::ops::RangeInclusive<u32>,
     /// Floor cut into k x k pieces (thesis 6.3.6); 1 keeps it whole.
     pub floor_split: u32,
+    /// Replace the scene's lights by this many inside its box (0: keep).
+    pub lights: usize,
 }
 
 /// The thesis' ladders. The split floor's k is ours (the thesis does not
@@ -34,24 +36,28 @@ pub const SERIES: [Series; 4] = [
         scene: "tree",
         sizes: 1..=11,
         floor_split: 1,
+        lights: 0,
     },
     Series {
         name: "tree, floor split",
         scene: "tree",
         sizes: 1..=11,
         floor_split: 16,
+        lights: 0,
     },
     Series {
         name: "balls",
         scene: "balls",
         sizes: 1..=4,
         floor_split: 1,
+        lights: 0,
     },
     Series {
         name: "gears",
         scene: "gears",
         sizes: 1..=4,
         floor_split: 1,
+        lights: 0,
     },
 ];
 

@@ -586,15 +586,7 @@ impl<'a> RTree<'a> {
         let big = self.params.max_children;
         // Path from the root to the leaf, as slots.
         let mut path = [0u32; MAX_HEIGHT + 1];
-        let mut depth = 0;
-        let mut slot = 0u32;
-        while !self.nodes[slot as usize].is_leaf() {
-            let nd = self.nodes[slot as usize];
-            path[depth] = slot;
-            depth += 1;
-            slot = nd.first + self.choose_subtree(&nd, &pb);
-        }
-        path[depth] = slot;
+        let depth = self.path_to(&pb, 0, &mut path);
         // Splits needed: full nodes from the leaf up; one more block when the root splits.
         let mut splits = 0;
         while splits <= depth && self.nodes[path[depth - splits] as usize].len() == big {
@@ -616,36 +608,10 @@ impl<'a> RTree<'a> {
                 got: self.nodes.len(),
             });
         }
-        // Entry to add at the current level, climbing while nodes overflow.
-        let mut entry = BvhNode::leaf(&pb, prim, 1);
-        let mut level = depth as isize;
-        loop {
-            let s = path[level as usize];
-            let nd = self.nodes[s as usize];
-            if nd.len() < big {
-                self.put(nd.is_leaf(), nd.first + nd.len(), &entry);
-                self.nodes[s as usize].set_len(nd.len() + 1);
-                self.refit(s);
-                break;
-            }
-            let sibling = self.split(s, &entry);
-            if level == 0 {
-                // The root split: a new root over the old one and its sibling.
-                let b = self.alloc_nodes().expect("room checked");
-                let old = self.nodes[0];
-                self.nodes[b as usize] = old;
-                self.nodes[b as usize + 1] = sibling;
-                let joint = old.bounds().union(&sibling.bounds());
-                self.nodes[0] = BvhNode::interior(&joint, b, 2);
-                self.state.height += 1;
-                break;
-            }
-            entry = sibling;
-            level -= 1;
-        }
-        for l in (0..level.max(0) as usize).rev() {
-            self.refit(path[l]);
-        }
+        // Every level counts as reinserted already: overflow splits.
+        let mut out = [BvhNode::default(); MAX_CHILDREN as usize];
+        let entry = BvhNode::leaf(&pb, prim, 1);
+        self.place_on_path(entry, &path, depth, &mut [true; MAX_HEIGHT + 1], &mut out);
         self.state.len += 1;
         Ok(())
     }
@@ -692,10 +658,24 @@ impl<'a> RTree<'a> {
         }
     }
 
+    /// The slots from the root down to the node `height` levels above the
+    /// leaves that an entry with box `b` goes into; returns its depth.
+    fn path_to(&self, b: &Aabb, height: u32, path: &mut [u32; MAX_HEIGHT + 1]) -> usize {
+        let top = self.state.height;
+        let mut depth = 0usize;
+        let mut slot = 0u32;
+        while top - depth as u32 > height {
+            let nd = self.nodes[slot as usize];
+            path[depth] = slot;
+            depth += 1;
+            slot = nd.first + self.choose_subtree(&nd, b);
+        }
+        path[depth] = slot;
+        depth
+    }
+
     /// Puts `entry` into a node `height` levels above the leaves (0: a
-    /// leaf), treating overflow the R* way: reinsertion once per level (the
-    /// taken entries go to `out`, farthest first; returns their count and
-    /// height), else a split, climbing while parents overflow.
+    /// leaf) by [`RTree::place_on_path`].
     fn place(
         &mut self,
         entry: Entry,
@@ -703,19 +683,25 @@ impl<'a> RTree<'a> {
         reinserted: &mut [bool; MAX_HEIGHT + 1],
         out: &mut [Entry; MAX_CHILDREN as usize],
     ) -> (usize, u32) {
+        let mut path = [0u32; MAX_HEIGHT + 1];
+        let depth = self.path_to(&entry.bounds(), height, &mut path);
+        self.place_on_path(entry, &path, depth, reinserted, out)
+    }
+
+    /// Adds `entry` to the node `path[depth]`, treating overflow the R* way
+    /// at levels not yet `reinserted` (the taken entries go to `out`,
+    /// farthest first; returns their count and height), else by a split,
+    /// climbing while parents overflow, and refits the path above.
+    fn place_on_path(
+        &mut self,
+        entry: Entry,
+        path: &[u32; MAX_HEIGHT + 1],
+        depth: usize,
+        reinserted: &mut [bool; MAX_HEIGHT + 1],
+        out: &mut [Entry; MAX_CHILDREN as usize],
+    ) -> (usize, u32) {
         let big = self.params.max_children;
         let top = self.state.height;
-        let eb = entry.bounds();
-        let mut path = [0u32; MAX_HEIGHT + 1];
-        let mut depth = 0usize;
-        let mut slot = 0u32;
-        while top - depth as u32 > height {
-            let nd = self.nodes[slot as usize];
-            path[depth] = slot;
-            depth += 1;
-            slot = nd.first + self.choose_subtree(&nd, &eb);
-        }
-        path[depth] = slot;
         let mut entry = entry;
         let mut level = depth;
         let mut taken = (0usize, 0u32);
@@ -736,6 +722,7 @@ impl<'a> RTree<'a> {
             }
             let sibling = self.split(s, &entry);
             if level == 0 {
+                // The root split: a new root over the old one and its sibling.
                 let b = self.alloc_nodes().expect("room checked");
                 let old = self.nodes[0];
                 self.nodes[b as usize] = old;
