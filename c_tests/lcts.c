@@ -53,9 +53,13 @@ int main(void) {
         CHECK(memcmp(t, t_ref, n * sizeof(float)) == 0);
         CHECK(memcmp(p, p_ref, n * sizeof(uint32_t)) == 0);
         if (scheme >= CORAY_SCHEME_SLCTS_1D) CHECK(st.windows > 0);
-        printf("scheme %u: %llu traversal steps (hierarchical %llu), %llu windows, %llu shared\n", scheme,
+        /* Only SLCTS windows without a shared leaf start at an entry node. */
+        CHECK(st.windows_entered <= st.windows - st.windows_shared);
+        if (scheme != CORAY_SCHEME_SLCTS_1D && scheme != CORAY_SCHEME_SLCTS_2D) CHECK(st.windows_entered == 0);
+        printf("scheme %u: %llu traversal steps (hierarchical %llu), %llu windows, %llu shared, %llu entered\n", scheme,
                (unsigned long long)st.trace.traversal_steps, (unsigned long long)st_ref.trace.traversal_steps,
-               (unsigned long long)st.windows, (unsigned long long)st.windows_shared);
+               (unsigned long long)st.windows, (unsigned long long)st.windows_shared,
+               (unsigned long long)st.windows_entered);
         free(scratch);
     }
     /* Bad parameters. */

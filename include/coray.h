@@ -415,6 +415,9 @@ typedef struct CorayCastStats {
   uint64_t windows_shared;
   // Shafts with a termination object.
   uint64_t windows_terminated;
+  // SLCTS windows without a shared leaf whose rays started below the
+  // root, at their corners' deepest common node.
+  uint64_t windows_entered;
 } CorayCastStats;
 
 // Result of a patch-to-patch visibility query.

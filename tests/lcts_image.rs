@@ -130,3 +130,122 @@ fn tiny_history_buffers_change_speed_not_results() {
         }
     }
 }
+
+/// The root-to-leaf path point location takes for `p` (going left on a tie
+/// when the direction points left, as the traversals do).
+fn locate_path(tree: &coray::kd::KdTree, p: coray::Vec3, d: coray::Vec3) -> Vec<u32> {
+    let mut path = vec![0u32];
+    let mut node = 0u32;
+    loop {
+        let nd = tree.nodes[node as usize];
+        if nd.is_leaf() {
+            return path;
+        }
+        let (a, s) = (nd.axis(), nd.split());
+        node = if p[a] < s || (p[a] == s && d[a] < 0.0) {
+            nd.index()
+        } else {
+            nd.index() + 1
+        };
+        path.push(node);
+    }
+}
+
+#[test]
+fn entry_node_is_where_the_corners_descents_part() {
+    use coray::lcts::history::{trace_recorded, History};
+    use coray::lcts::slcts::entry_node;
+    let m = SceneMesh::from_nff(&spd::generate("lattice", None, &Options::default()).unwrap());
+    let scene = m.scene();
+    let mut cam = m.camera;
+    cam.width = 256;
+    cam.height = 256;
+    let params = KdParams::paper();
+    let (req, mut b) = ideal_storage(&scene, &params);
+    let tree = build_with(&scene, &params, &req, &mut b);
+    let (f, r, u) = cam.basis();
+    let ray = |x: u32, y: u32| cam.ray_in(f, r, u, x as f32 + 0.5, y as f32 + 0.5);
+    let root = tree.info.trace_bounds();
+    let mut rng = Rng(7);
+    let (mut below_root, mut checked_points) = (0, 0);
+    for wy in (0..252).step_by(4) {
+        for wx in (0..252).step_by(4) {
+            let corners = [(wx, wy), (wx + 4, wy), (wx, wy + 4), (wx + 4, wy + 4)];
+            let mut bufs = vec![vec![HistoryRecord::default(); 512]; 4];
+            let mut lens = [0usize; 4];
+            for (j, buf) in bufs.iter_mut().enumerate() {
+                let mut h = History::new(buf);
+                trace_recorded(
+                    &tree,
+                    &ray(corners[j].0, corners[j].1),
+                    &mut h,
+                    &mut Default::default(),
+                );
+                assert!(!h.overflow);
+                lens[j] = h.len;
+            }
+            let hs: Vec<Option<&[HistoryRecord]>> =
+                bufs.iter().zip(lens).map(|(b, n)| Some(&b[..n])).collect();
+            let Some(e) = entry_node(&tree, &hs) else {
+                // Only a corner that misses the scene has no descent.
+                assert!(lens.contains(&0));
+                continue;
+            };
+            below_root += (e.node != 0) as usize;
+            // On every corner's descent; below it the descents part (unless
+            // the entry node is a first leaf they all share).
+            let mut next = Vec::new();
+            for (j, h) in hs.iter().enumerate() {
+                let h = h.unwrap();
+                let descent: Vec<u32> = h
+                    .iter()
+                    .take_while(|rec| rec.kind() < 4)
+                    .map(|rec| rec.node)
+                    .chain(h.iter().find(|rec| rec.kind() == 4).map(|rec| rec.node))
+                    .collect();
+                let at = descent.iter().position(|&n| n == e.node);
+                assert!(
+                    at.is_some(),
+                    "window {wx},{wy}: entry {} not on corner {j}",
+                    e.node
+                );
+                next.push(descent.get(at.unwrap() + 1).copied());
+            }
+            if !tree.nodes[e.node as usize].is_leaf() {
+                assert!(
+                    next.iter().any(|n| *n != next[0]),
+                    "window {wx},{wy}: not the deepest"
+                );
+            }
+            // The contract: a point the entry node holds is located through it.
+            // Points around the node's region, in and out of it.
+            let lo = e.lo.max(root.min);
+            let hi = e.hi.min(root.max);
+            let pad = (hi - lo) * 0.2;
+            for _ in 0..20 {
+                let p = rng.vec(0.0, 1.0) * (hi - lo + pad * 2.0) + lo - pad;
+                let d = rng.unit();
+                if e.holds(p) {
+                    checked_points += 1;
+                    assert!(
+                        locate_path(&tree, p, d).contains(&e.node),
+                        "window {wx},{wy}: {p:?}"
+                    );
+                }
+            }
+        }
+    }
+    assert!(
+        below_root > 500,
+        "{below_root} windows start below the root"
+    );
+    assert!(checked_points > 100, "{checked_points} points held");
+    // And casting uses it: lattice's small surface leaves leave many
+    // windows without a common leaf.
+    let (_, _, st) = cast(&tree, &cam, Scheme::Slcts2d { n: 5, m: 5 }, 256);
+    assert!(
+        st.windows_entered > 100,
+        "{} windows entered",
+        st.windows_entered
+    );
+}

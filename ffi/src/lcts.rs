@@ -72,6 +72,9 @@ pub struct CorayCastStats {
     pub windows_shared: u64,
     /// Shafts with a termination object.
     pub windows_terminated: u64,
+    /// SLCTS windows without a shared leaf whose rays started below the
+    /// root, at their corners' deepest common node.
+    pub windows_entered: u64,
 }
 
 /// Result of a patch-to-patch visibility query.
@@ -255,6 +258,7 @@ pub unsafe extern "C" fn coray_kdtree_cast_image(
                     windows: st.windows,
                     windows_shared: st.windows_shared,
                     windows_terminated: st.windows_terminated,
+                    windows_entered: st.windows_entered,
                 };
             }
         }

@@ -6,7 +6,9 @@
 //! (n x 1 pixels on a scanline for SLCTS-1D, n x m for SLCTS-2D; corners are
 //! shared by neighbouring windows) are traced hierarchically with their
 //! histories recorded, and every other pixel of the window is traced along
-//! the window's common leaf sequence, then by ropes.
+//! the window's common leaf sequence, then by ropes. A window whose corners
+//! share no leaf still shares their descent: its rays locate their first
+//! leaf from the corners' deepest common node, then go on by ropes.
 
 use super::history::{trace_recorded, History, HistoryRecord};
 use super::hlcts::{self, Boundary, HlctsEntry, Source, MAX_RAYS};
@@ -85,6 +87,9 @@ pub struct CastStats {
     pub windows_shared: u64,
     /// Windows that had a termination object.
     pub windows_terminated: u64,
+    /// SLCTS windows without a common leaf whose rays start below the root,
+    /// at their corners' deepest common node.
+    pub windows_entered: u64,
 }
 
 impl CastStats {
@@ -365,6 +370,7 @@ fn count_window(st: &mut CastStats, seq: &slcts::Slcts) {
     st.windows += 1;
     st.windows_shared += (seq.leaves > 0) as u64;
     st.windows_terminated += seq.termination.is_some() as u64;
+    st.windows_entered += (seq.leaves == 0 && seq.entry.is_some_and(|e| e.node != 0)) as u64;
 }
 
 /// What the cast keeps of a corner ray besides its history records.

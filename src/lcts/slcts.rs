@@ -2,11 +2,19 @@
 //! in the same order. A ray inside the shaft visits them too (the shaft and
 //! the cells are convex), so it tests their primitives without any descent,
 //! and if it finds no hit there goes on by ropes from the last of them.
+//!
+//! When the boundary rays share no leaf (their first leaves differ, as at
+//! the many small leaves of a deep tree's surface), they still share the
+//! top of their descent: a ray of the shaft whose entry point lies strictly
+//! inside the deepest node all of them passed through ([`EntryNode`])
+//! locates its first leaf from there and goes on by ropes. Point location
+//! from a node whose split bounds hold the point strictly makes the root's
+//! decisions, so the hit is still the hierarchical one.
 
 use super::history::{HistoryRecord, KIND_LEAF};
 use crate::kd::traverse::{Closest, NoRecord, RopeEnd, Steps};
 use crate::kd::KdTree;
-use crate::{Hit, Ray, TraceStats};
+use crate::{Hit, Ray, TraceStats, Vec3};
 
 /// Marks a sequence entry standing for a run of empty leaves (unification
 /// of empty leaves, section 4.3.1): the run costs one step and no test.
@@ -25,6 +33,68 @@ pub struct Slcts<'b> {
     pub termination: Option<u32>,
     /// Leaves the sequence covers (before unification).
     pub leaves: usize,
+    /// The deepest node every boundary ray descended through on its way to
+    /// its first leaf: where a ray of a shaft without common leaves starts
+    /// looking for its own first leaf.
+    pub entry: Option<EntryNode>,
+}
+
+/// A node and the open region of space the splits above it bound: a point
+/// strictly inside is located from the node exactly as from the root.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EntryNode {
+    /// Node index.
+    pub node: u32,
+    /// Lower split bounds (minus infinity where no split bounds the node).
+    pub lo: Vec3,
+    /// Upper split bounds (plus infinity where none does).
+    pub hi: Vec3,
+}
+
+impl EntryNode {
+    /// Whether point location of `p` from the root passes through this node
+    /// with every decision strict (no tie on a split plane).
+    #[inline]
+    pub fn holds(&self, p: Vec3) -> bool {
+        p.cmpgt(self.lo).all() && p.cmplt(self.hi).all()
+    }
+}
+
+/// The deepest node on every history's descent to its first leaf (a
+/// preorder history starts with that descent: each record before the first
+/// leaf is an interior node whose next record is its first child).
+pub fn entry_node(tree: &KdTree, histories: &[Option<&[HistoryRecord]>]) -> Option<EntryNode> {
+    let first = (*histories.first()?)?;
+    if histories.iter().any(|h| h.map_or(true, |h| h.is_empty())) {
+        return None;
+    }
+    let mut e = EntryNode {
+        node: first.first()?.node,
+        lo: Vec3::splat(f32::NEG_INFINITY),
+        hi: Vec3::splat(f32::INFINITY),
+    };
+    for i in 0.. {
+        let r = *first.get(i)?;
+        if r.kind() >= 4 {
+            return Some(e);
+        }
+        let next = first.get(i + 1)?.node;
+        if histories
+            .iter()
+            .any(|h| h.and_then(|h| h.get(i + 1)).map(|x| x.node) != Some(next))
+        {
+            return Some(e);
+        }
+        let nd = tree.nodes[r.node as usize];
+        let (a, split) = (nd.axis(), nd.split());
+        if next == nd.index() {
+            e.hi[a] = split;
+        } else {
+            e.lo[a] = split;
+        }
+        e.node = next;
+    }
+    Some(e)
 }
 
 /// Builds the SLCTS of boundary rays with histories `histories` (each
@@ -41,10 +111,12 @@ pub fn build<'b>(
         len: 0,
         termination: None,
         leaves: 0,
+        entry: None,
     };
     if histories.is_empty() || histories.iter().any(|h| h.is_none()) {
         return s;
     }
+    s.entry = entry_node(tree, histories);
     // Walk the leaf records of every history in lockstep.
     let mut pos = [0usize; 8];
     let k = histories.len().min(pos.len());
@@ -171,6 +243,7 @@ pub fn trace(tree: &KdTree, s: &Slcts, ray: &Ray, stats: &mut TraceStats) -> Hit
         .clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max);
     let done = match root {
         None => true,
+        Some((t0, t1)) if s.len == 0 => walk_from_entry(tree, s, &mut v, t0, t1, &mut steps),
         Some((_, t1)) => walk_sequence(tree, s, &mut v, t1, &mut steps),
     };
     if !done {
@@ -180,6 +253,32 @@ pub fn trace(tree: &KdTree, s: &Slcts, ray: &Ray, stats: &mut TraceStats) -> Hit
     steps.flush(stats);
     stats.prim_tests += v.tests;
     v.best
+}
+
+/// No common leaf: the ray finds its first leaf from the shaft's entry
+/// node (one step for the test that its entry point lies there), then goes
+/// on by ropes. False when it must be redone hierarchically.
+fn walk_from_entry(
+    tree: &KdTree,
+    s: &Slcts,
+    v: &mut Closest,
+    t0: f32,
+    t1: f32,
+    steps: &mut Steps,
+) -> bool {
+    let Some(e) = s.entry else {
+        return false;
+    };
+    let r = v.ray;
+    let p = r.at(t0);
+    steps.interior += 1;
+    if !e.holds(p) {
+        return false;
+    }
+    match tree.locate(e.node, p, r.dir, steps) {
+        Some(first) => tree.rope_walk(v, first, t1, steps) != RopeEnd::Fallback,
+        None => false,
+    }
 }
 
 /// The sequence, then ropes. False when the ray must be redone
