@@ -223,6 +223,26 @@ impl<'a> KdTree<'a> {
         v.best
     }
 
+    /// [`KdTree::intersect`] with hierarchical traversal on a stack the
+    /// caller keeps across rays: a loop of rays initialises it once.
+    pub(crate) fn intersect_on(
+        &self,
+        ray: &Ray,
+        stack: &mut TraversalStack,
+        stats: &mut TraceStats,
+    ) -> Hit {
+        stats.rays += 1;
+        if !ray.is_valid() {
+            return Hit::MISS;
+        }
+        let mut v = Closest::new(ray);
+        let mut steps = Steps::default();
+        self.walk_hierarchical_on(&mut v, &mut NoRecord, stack, &mut steps);
+        steps.flush(stats);
+        stats.prim_tests += v.tests;
+        v.best
+    }
+
     /// True when anything lies on `ray` within `[t_min, t_max]`.
     pub fn occluded(&self, ray: &Ray, method: Traversal, stats: &mut TraceStats) -> bool {
         stats.rays += 1;
@@ -276,7 +296,8 @@ impl<'a> KdTree<'a> {
         &self.refs[l.first_ref as usize..(l.first_ref + l.ref_count) as usize]
     }
 
-    /// Hierarchical traversal from the root; true when the visitor stopped it.
+    /// Hierarchical traversal from the root; true when the visitor stopped
+    /// it. The stack is made only for a ray that meets the scene's box.
     pub(crate) fn walk_hierarchical<V: LeafVisitor, R: Recorder>(
         &self,
         v: &mut V,
@@ -290,6 +311,25 @@ impl<'a> KdTree<'a> {
             .clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max)
         {
             Some((t0, t1)) => self.walk_from(v, rec, &mut new_stack(), 0, t0, t1, steps),
+            None => false,
+        }
+    }
+
+    /// [`KdTree::walk_hierarchical`] on the caller's stack.
+    pub(crate) fn walk_hierarchical_on<V: LeafVisitor, R: Recorder>(
+        &self,
+        v: &mut V,
+        rec: &mut R,
+        stack: &mut TraversalStack,
+        steps: &mut Steps,
+    ) -> bool {
+        let r = *v.ray();
+        match self
+            .info
+            .trace_bounds()
+            .clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max)
+        {
+            Some((t0, t1)) => self.walk_from(v, rec, stack, 0, t0, t1, steps),
             None => false,
         }
     }

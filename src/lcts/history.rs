@@ -3,7 +3,7 @@
 //! paper's traversal tree, flattened), leaves, and nodes pushed but never
 //! visited because the ray ended first.
 
-use crate::kd::traverse::{Closest, Recorder, Steps};
+use crate::kd::traverse::{new_stack, Closest, Recorder, Steps, TraversalStack};
 use crate::kd::{Decision, KdTree};
 use crate::{Hit, Ray, TraceStats};
 
@@ -139,6 +139,17 @@ impl Recorder for History<'_> {
 /// `h` (cleared first). The hit is exactly that of
 /// [`KdTree::intersect`] with hierarchical traversal.
 pub fn trace_recorded(tree: &KdTree, ray: &Ray, h: &mut History, stats: &mut TraceStats) {
+    trace_recorded_on(tree, ray, h, &mut new_stack(), stats);
+}
+
+/// [`trace_recorded`] on a traversal stack the caller keeps across rays.
+pub(crate) fn trace_recorded_on(
+    tree: &KdTree,
+    ray: &Ray,
+    h: &mut History,
+    stack: &mut TraversalStack,
+    stats: &mut TraceStats,
+) {
     h.len = 0;
     h.overflow = false;
     h.hit = Hit::MISS;
@@ -148,7 +159,7 @@ pub fn trace_recorded(tree: &KdTree, ray: &Ray, h: &mut History, stats: &mut Tra
     }
     let mut v = Closest::new(ray);
     let mut steps = Steps::default();
-    tree.walk_hierarchical(&mut v, h, &mut steps);
+    tree.walk_hierarchical_on(&mut v, h, stack, &mut steps);
     steps.flush(stats);
     stats.prim_tests += v.tests;
     h.hit = v.best;

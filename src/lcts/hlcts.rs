@@ -9,7 +9,7 @@
 
 use super::history::{fill_lengths, History, HistoryRecord, KIND_LEAF};
 use crate::geom::Aabb;
-use crate::kd::traverse::{new_stack, Closest, NoRecord, Steps};
+use crate::kd::traverse::{new_stack, Closest, NoRecord, Steps, TraversalStack};
 use crate::kd::{KdNode, KdTree};
 use crate::{Hit, Ray, TraceStats, Vec3};
 
@@ -337,7 +337,19 @@ pub fn trace(
     tree: &KdTree,
     h: &Hlcts,
     ray: &Ray,
+    record: Option<(&mut History, &mut [u32])>,
+    stats: &mut TraceStats,
+) -> Hit {
+    trace_on(tree, h, ray, record, &mut new_stack(), stats)
+}
+
+/// [`trace`] on a traversal stack the caller keeps across rays.
+pub(crate) fn trace_on(
+    tree: &KdTree,
+    h: &Hlcts,
+    ray: &Ray,
     mut record: Option<(&mut History, &mut [u32])>,
+    stack: &mut TraversalStack,
     stats: &mut TraceStats,
 ) -> Hit {
     stats.rays += 1;
@@ -382,7 +394,6 @@ pub fn trace(
         }
     }
     if !hit_via_termination {
-        let mut stack = new_stack();
         for (e, entry) in h.as_slice().iter().enumerate() {
             if entry.flags & ENTRY_EMPTY_RUN != 0 {
                 // Nothing to test; one step for the whole run.
@@ -404,25 +415,11 @@ pub fn trace(
             let stopped = match record.as_mut() {
                 Some((hist, starts)) => {
                     starts[e] = hist.len as u32;
-                    tree.walk_from(
-                        &mut v,
-                        &mut **hist,
-                        &mut stack,
-                        entry.node,
-                        t0,
-                        t1,
-                        &mut steps,
-                    )
+                    tree.walk_from(&mut v, &mut **hist, stack, entry.node, t0, t1, &mut steps)
                 }
-                None => tree.walk_from(
-                    &mut v,
-                    &mut NoRecord,
-                    &mut stack,
-                    entry.node,
-                    t0,
-                    t1,
-                    &mut steps,
-                ),
+                None => {
+                    tree.walk_from(&mut v, &mut NoRecord, stack, entry.node, t0, t1, &mut steps)
+                }
             };
             if stopped {
                 break;

@@ -10,10 +10,11 @@
 //! share no leaf still shares their descent: its rays locate their first
 //! leaf from the corners' deepest common node, then go on by ropes.
 
-use super::history::{trace_recorded, History, HistoryRecord};
+use super::history::{trace_recorded_on, History, HistoryRecord};
 use super::hlcts::{self, Boundary, HlctsEntry, Source, MAX_RAYS};
 use super::slcts;
 use crate::geom::{Camera, Hit, INVALID_ID};
+use crate::kd::traverse::{new_stack, TraversalStack};
 use crate::kd::{KdTree, Traversal};
 use crate::{Error, TraceStats};
 
@@ -224,21 +225,25 @@ pub fn cast_image(
     let (f, r, u) = camera.basis();
     let ray = |x: u32, y: u32| camera.ray_in(f, r, u, x as f32 + 0.5, y as f32 + 0.5);
     let mut st = CastStats::default();
+    let mut stack = new_stack();
     let mut put = |x: u32, y: u32, hit: &Hit| {
         let i = y as usize * w as usize + x as usize;
         t_out[i] = hit.t;
         prim_out[i] = global_prim(tree, hit);
     };
     match scheme {
-        Scheme::Hierarchical | Scheme::Ropes => {
-            let m = if scheme == Scheme::Ropes {
-                Traversal::Ropes
-            } else {
-                Traversal::Hierarchical
-            };
+        Scheme::Hierarchical => {
             for y in 0..h {
                 for x in 0..w {
-                    let hit = tree.intersect(&ray(x, y), m, &mut st.trace);
+                    let hit = tree.intersect_on(&ray(x, y), &mut stack, &mut st.trace);
+                    put(x, y, &hit);
+                }
+            }
+        }
+        Scheme::Ropes => {
+            for y in 0..h {
+                for x in 0..w {
+                    let hit = tree.intersect(&ray(x, y), Traversal::Ropes, &mut st.trace);
                     put(x, y, &hit);
                 }
             }
@@ -299,7 +304,7 @@ pub fn cast_image(
                     let xi = corners(w, n, i);
                     let buf = &mut bottom[i * cap..(i + 1) * cap];
                     let mut hist = History::new(buf);
-                    trace_recorded(tree, &ray(xi, yj), &mut hist, &mut st.trace);
+                    trace_recorded_on(tree, &ray(xi, yj), &mut hist, &mut stack, &mut st.trace);
                     put(xi, yj, &hist.hit);
                     hist_lens_bottom.info[i] = CornerInfo {
                         len: hist.len as u32,
@@ -318,7 +323,8 @@ pub fn cast_image(
                         let seq = slcts::build(tree, &hs, &hits, &mut *scratch.entries);
                         count_window(&mut st, &seq);
                         for x in corners(w, n, i) + 1..corners(w, n, i + 1) {
-                            let hit = slcts::trace(tree, &seq, &ray(x, yj), &mut st.trace);
+                            let hit =
+                                slcts::trace_on(tree, &seq, &ray(x, yj), &mut stack, &mut st.trace);
                             put(x, yj, &hit);
                         }
                     }
@@ -350,7 +356,13 @@ pub fn cast_image(
                                 if corner_row && (x == x0 || x == x1) {
                                     continue;
                                 }
-                                let hit = slcts::trace(tree, &seq, &ray(x, y), &mut st.trace);
+                                let hit = slcts::trace_on(
+                                    tree,
+                                    &seq,
+                                    &ray(x, y),
+                                    &mut stack,
+                                    &mut st.trace,
+                                );
                                 put(x, y, &hit);
                             }
                         }
@@ -434,6 +446,8 @@ struct Bisection<'t, 'o, F: FnMut(u32, u32, &Hit)> {
     leaf_pixels: u32,
     put: &'o mut F,
     st: CastStats,
+    /// One traversal stack for every ray of the cast.
+    stack: TraversalStack,
 }
 
 impl<F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, F> {
@@ -457,11 +471,12 @@ impl<F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, F> {
         let (rec, records) = free.records.split_at_mut(self.cap);
         let (starts, rest_starts) = free.starts.split_at_mut(self.per_cut);
         let mut h = History::new(rec);
-        let hit = hlcts::trace(
+        let hit = hlcts::trace_on(
             self.tree,
             cut,
             &self.ray(x, y),
             Some((&mut h, &mut starts[..cut.len.max(1)])),
+            &mut self.stack,
             &mut self.st.trace,
         );
         (self.put)(x, y, &hit);
@@ -526,8 +541,14 @@ impl<F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, F> {
             }
             if x1 - x0 < LEAF_PIXELS_1D {
                 for x in x0 + 1..x1 {
-                    let hit =
-                        hlcts::trace(self.tree, &cut, &self.ray(x, y0), None, &mut self.st.trace);
+                    let hit = hlcts::trace_on(
+                        self.tree,
+                        &cut,
+                        &self.ray(x, y0),
+                        None,
+                        &mut self.stack,
+                        &mut self.st.trace,
+                    );
                     (self.put)(x, y0, &hit);
                 }
                 return;
@@ -555,11 +576,12 @@ impl<F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, F> {
             for y in y0..=y1 {
                 for x in x0..=x1 {
                     if !corner(x, y) {
-                        let hit = hlcts::trace(
+                        let hit = hlcts::trace_on(
                             self.tree,
                             &cut,
                             &self.ray(x, y),
                             None,
+                            &mut self.stack,
                             &mut self.st.trace,
                         );
                         (self.put)(x, y, &hit);
@@ -710,6 +732,7 @@ fn cast_bisection(
         leaf_pixels: LEAF_PIXELS,
         put: &mut put,
         st: CastStats::default(),
+        stack: new_stack(),
     };
     let root = [hlcts::root_entry(tree)];
     let rows = if scheme == Scheme::Hlcts1d { h } else { 1 };
@@ -736,7 +759,13 @@ fn cast_bisection(
         for (j, c) in corner_recs.chunks_mut(cap).enumerate().take(k) {
             let (x, yy) = pts[j];
             let mut hist = History::new(c);
-            trace_recorded(tree, &b.ray(x, yy), &mut hist, &mut b.st.trace);
+            trace_recorded_on(
+                tree,
+                &b.ray(x, yy),
+                &mut hist,
+                &mut b.stack,
+                &mut b.st.trace,
+            );
             (b.put)(x, yy, &hist.hit);
             infos[j] = (hist.len, hist.overflow, hist.hit);
         }

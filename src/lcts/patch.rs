@@ -4,9 +4,10 @@
 //! patches; the visible fraction is the share of sample segments that meet
 //! nothing.
 
-use super::history::{trace_recorded, History, HistoryRecord};
+use super::history::{trace_recorded_on, History, HistoryRecord};
 use super::hlcts::{self, Boundary, HlctsEntry, Source, MAX_RAYS};
 use crate::geom::{Hit, Ray, Vec3};
+use crate::kd::traverse::new_stack;
 use crate::kd::KdTree;
 use crate::{Error, TraceStats};
 
@@ -99,6 +100,7 @@ pub fn patch_visibility(
         });
     }
     let mut out = PatchVisibility::default();
+    let mut stack = new_stack();
     // The boundary segments, traced from the root with their histories.
     let mut lens = [(0usize, false, Hit::MISS); MAX_RAYS];
     let mut rays = [Ray::new(Vec3::ZERO, Vec3::X, 0.0, 1.0); MAX_RAYS];
@@ -106,7 +108,7 @@ pub fn patch_visibility(
         let (ia, ib) = (j / b.len(), j % b.len());
         rays[j] = segment(a[ia], b[ib], eps);
         let mut h = History::new(slot);
-        trace_recorded(tree, &rays[j], &mut h, &mut out.boundary);
+        trace_recorded_on(tree, &rays[j], &mut h, &mut stack, &mut out.boundary);
         lens[j] = (h.len, h.overflow, h.hit);
     }
     let records: &[HistoryRecord] = scratch.records;
@@ -136,7 +138,14 @@ pub fn patch_visibility(
         let p = patch_point(a, step(ia % n), step(ia / n));
         for ib in 0..n * n {
             let q = patch_point(b, step(ib % n), step(ib / n));
-            let hit = hlcts::trace(tree, &cut, &segment(p, q, eps), None, &mut out.trace);
+            let hit = hlcts::trace_on(
+                tree,
+                &cut,
+                &segment(p, q, eps),
+                None,
+                &mut stack,
+                &mut out.trace,
+            );
             out.samples += 1;
             out.visible += !hit.is_hit() as u32;
         }

@@ -12,7 +12,7 @@
 //! decisions, so the hit is still the hierarchical one.
 
 use super::history::{HistoryRecord, KIND_LEAF};
-use crate::kd::traverse::{Closest, NoRecord, RopeEnd, Steps};
+use crate::kd::traverse::{new_stack, Closest, NoRecord, RopeEnd, Steps, TraversalStack};
 use crate::kd::KdTree;
 use crate::{Hit, Ray, TraceStats, Vec3};
 
@@ -207,6 +207,18 @@ fn termination_object(
 /// hierarchical traversal would answer: the termination object when there
 /// is one, else the sequence's leaves, then ropes from the last of them.
 pub fn trace(tree: &KdTree, s: &Slcts, ray: &Ray, stats: &mut TraceStats) -> Hit {
+    trace_on(tree, s, ray, &mut new_stack(), stats)
+}
+
+/// [`trace`] on a traversal stack the caller keeps across rays (used only
+/// when a ray must be redone hierarchically).
+pub(crate) fn trace_on(
+    tree: &KdTree,
+    s: &Slcts,
+    ray: &Ray,
+    stack: &mut TraversalStack,
+    stats: &mut TraceStats,
+) -> Hit {
     stats.rays += 1;
     if !ray.is_valid() {
         return Hit::MISS;
@@ -248,7 +260,7 @@ pub fn trace(tree: &KdTree, s: &Slcts, ray: &Ray, stats: &mut TraceStats) -> Hit
     };
     if !done {
         v.best = Hit::MISS;
-        tree.walk_hierarchical(&mut v, &mut NoRecord, &mut steps);
+        tree.walk_hierarchical_on(&mut v, &mut NoRecord, stack, &mut steps);
     }
     steps.flush(stats);
     stats.prim_tests += v.tests;
