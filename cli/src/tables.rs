@@ -99,24 +99,30 @@ impl Column {
         self.rows.iter().find(|r| r.method == method)
     }
     fn alpha(&self, method: &str) -> Option<f64> {
-        let k = bench::reference(&self.rows)?;
-        Some(self.row(method)?.tspr? / k.tspr?)
+        bench::ratios(self.row(method)?, &self.rows).0
     }
     fn eta(&self, method: &str) -> Option<f64> {
-        let k = bench::reference(&self.rows)?;
-        Some(self.row(method)?.primary_s / k.primary_s)
+        bench::ratios(self.row(method)?, &self.rows).1
     }
 }
 
-/// Runs the six methods on one scene (primary rays only, as the paper).
+/// Runs the six methods on one scene (primary rays only, as the paper),
+/// each as an image cast through the same harness, each compared with the
+/// hierarchical cast timed in its own run (so the hierarchical row's eta
+/// shows the timing noise).
 pub fn column(
     s: &SceneData,
     label: String,
     params: &coray::kd::KdParams,
     repeat: usize,
 ) -> Result<Column, String> {
-    let methods: Vec<String> = LCTS_METHODS.iter().map(|(m, _)| m.to_string()).collect();
-    let rows = bench::bench(s, &methods, params, repeat, false)?;
+    let rows = LCTS_METHODS
+        .iter()
+        .map(|(m, _)| {
+            let scheme = bench::lcts_scheme(m).expect("an LCTS table method");
+            Ok(bench::run_lcts(s, params, scheme, m, repeat)?.row)
+        })
+        .collect::<Result<Vec<Row>, String>>()?;
     Ok(Column {
         label,
         scene: s.name.clone(),
