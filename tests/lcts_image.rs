@@ -249,3 +249,62 @@ fn entry_node_is_where_the_corners_descents_part() {
         st.windows_entered
     );
 }
+
+/// A ray traced from a cut tests the cut's entries in order: every entry
+/// tested is a traversal step, the ones its segment misses included (they
+/// were once free, which flattered HLCTS's alpha on sparse scenes).
+#[test]
+fn every_cut_entry_a_ray_tests_is_a_step() {
+    use coray::lcts::hlcts::{self, Hlcts, NONE};
+    use coray::TraceStats;
+    let m = SceneMesh::from_nff(&spd::generate("tetra", None, &Options::default()).unwrap());
+    let scene = m.scene();
+    let params = KdParams::paper();
+    let (req, mut b) = ideal_storage(&scene, &params);
+    let tree = build_with(&scene, &params, &req, &mut b);
+    let cam = m.camera;
+    let (f, r, u) = cam.basis();
+    let mut checked = 0;
+    for (x, y) in (0..20).flat_map(|i| (0..20).map(move |j| (i as f32 / 20.0, j as f32 / 20.0))) {
+        let ray = cam.ray_in(f, r, u, x * cam.width as f32, y * cam.height as f32);
+        let mut hier = TraceStats::default();
+        let hit = tree.intersect(&ray, coray::kd::Traversal::Hierarchical, &mut hier);
+        if !hit.is_hit() {
+            continue;
+        }
+        // A leaf the ray misses, then the root: the ray tests the leaf's
+        // box (one step), then walks the whole tree as hierarchical traversal.
+        let missed = (0..tree.nodes.len())
+            .filter(|&n| tree.nodes[n].is_leaf())
+            .map(|n| (n, tree.ropes[tree.nodes[n].index() as usize].bounds()))
+            .find(|(_, bx)| {
+                bx.clip_ray(ray.origin, ray.dir.recip(), ray.t_min, ray.t_max)
+                    .is_none()
+            })
+            .unwrap();
+        let entry = |node: usize, bx: coray::Aabb| HlctsEntry {
+            node: node as u32,
+            flags: 0,
+            min: bx.min.into(),
+            max: bx.max.into(),
+            ptr: [NONE; hlcts::MAX_RAYS],
+        };
+        let mut entries = [entry(missed.0, missed.1), hlcts::root_entry(&tree)];
+        let cut = Hlcts {
+            entries: &mut entries,
+            len: 2,
+            leading_leaves: 1,
+            termination: None,
+        };
+        let mut st = TraceStats::default();
+        let h = hlcts::trace(&tree, &cut, &ray, None, &mut st);
+        assert_eq!((h.prim_id, h.t), (hit.prim_id, hit.t));
+        assert_eq!(
+            st.traversal_steps,
+            hier.traversal_steps + 1,
+            "pixel {x},{y}"
+        );
+        checked += 1;
+    }
+    assert!(checked > 20, "{checked} rays hit");
+}

@@ -373,6 +373,16 @@ pub(crate) fn trace_on(
     let mut v = Closest::new(ray);
     let mut steps = Steps::default();
     let r = v.ray;
+    if tree
+        .info
+        .trace_bounds()
+        .clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max)
+        .is_none()
+    {
+        // Outside the scene's box: no step, as in every traversal (the
+        // history is already empty).
+        return Hit::MISS;
+    }
     let mut hit_via_termination = false;
     if let (Some(o), None) = (h.termination, record.as_ref()) {
         v.tests += 1;
@@ -429,6 +439,8 @@ pub(crate) fn trace_on(
                 max: Vec3::from(entry.max),
             };
             let Some((t0, t1)) = bx.clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max) else {
+                // Testing an entry the ray misses is a step too.
+                steps.interior += 1;
                 continue;
             };
             let stopped = match record.as_mut() {
