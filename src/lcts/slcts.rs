@@ -248,11 +248,10 @@ pub(crate) fn trace_on(
         }
         // Rounding, or a hit on the leaf's boundary: the sequence decides.
     }
-    let r = v.ray;
-    let root = tree
-        .info
-        .trace_bounds()
-        .clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max);
+    let root =
+        tree.info
+            .trace_bounds()
+            .clip_ray(v.ray.origin, v.ray.inv_dir, v.ray.t_min, v.ray.t_max);
     let done = match root {
         None => true,
         Some((t0, t1)) if s.len == 0 => walk_from_entry(tree, s, &mut v, t0, t1, &mut steps),
@@ -299,7 +298,6 @@ fn walk_sequence(tree: &KdTree, s: &Slcts, v: &mut Closest, t1: f32, steps: &mut
     if s.len == 0 {
         return false;
     }
-    let r = v.ray;
     for &e in &s.entries[..s.len] {
         steps.leaves += 1;
         let nd = tree.nodes[(e & !EMPTY_RUN) as usize];
@@ -307,16 +305,21 @@ fn walk_sequence(tree: &KdTree, s: &Slcts, v: &mut Closest, t1: f32, steps: &mut
             steps.empty += 1;
             continue;
         }
-        let (t_exit, _) = tree.leaf_exit(&r, nd);
-        if crate::kd::traverse::LeafVisitor::visit(
+        // The leaf's exit matters only once something is hit: test first.
+        crate::kd::traverse::LeafVisitor::visit(
             v,
             &tree.scene,
             tree.leaf_refs(nd),
-            t_exit.min(t1),
-        ) {
-            return true;
+            f32::NEG_INFINITY,
+        );
+        if v.best.is_hit() {
+            let t_exit = tree.leaf_exit(&v.ray, nd).0.min(t1);
+            if crate::kd::traverse::inside_leaf(v.best.t, t_exit) {
+                return true;
+            }
         }
     }
+    let r = v.ray;
     let last = tree.nodes[(s.entries[s.len - 1] & !EMPTY_RUN) as usize];
     let (t_exit, face) = tree.leaf_exit(&r, last);
     if t_exit > t1 {
