@@ -767,23 +767,21 @@ pub unsafe extern "C" fn coray_bvh_intersect(
     stack_bytes: usize,
     stats: *mut CorayBvhStats,
 ) -> CorayStatus {
-    guard(|| {
-        // SAFETY: forwarded caller contract for every pointer.
-        let (t, rays, hits) = unsafe {
-            (
-                view(bvh_arena, bvh_bytes, carve::scene(scene)?)?.1,
-                carve::input(rays, count)?,
-                carve::output(hits, count)?,
-            )
-        };
-        // SAFETY: forwarded caller contract.
-        let stk = unsafe { stack(&t, stack_mem, stack_bytes)? };
-        let mut st = BvhStats::default();
-        for (r, h) in rays.iter().zip(hits.iter_mut()) {
-            *h = t.intersect(&r.into(), stk, &mut st).into();
-        }
-        put_stats(stats, &st)
-    })
+    // SAFETY: forwarded caller contract.
+    unsafe {
+        batch(
+            bvh_arena,
+            bvh_bytes,
+            scene,
+            rays,
+            hits,
+            count,
+            stack_mem,
+            stack_bytes,
+            stats,
+            |t, r, stk, st| t.intersect(r, stk, st).into(),
+        )
+    }
 }
 
 /// Any-hit queries (shadow rays): `occluded[i]` is 1 when something lies on
@@ -803,20 +801,56 @@ pub unsafe extern "C" fn coray_bvh_occluded(
     stack_bytes: usize,
     stats: *mut CorayBvhStats,
 ) -> CorayStatus {
+    // SAFETY: forwarded caller contract.
+    unsafe {
+        batch(
+            bvh_arena,
+            bvh_bytes,
+            scene,
+            rays,
+            occluded,
+            count,
+            stack_mem,
+            stack_bytes,
+            stats,
+            |t, r, stk, st| t.occluded(r, stk, st) as u8,
+        )
+    }
+}
+
+/// The body of [`coray_bvh_intersect`] and [`coray_bvh_occluded`]: views
+/// the arena, carves rays, answers, stack and statistics, and writes
+/// `answer` for each ray.
+///
+/// # Safety
+/// As [`coray_bvh_intersect`], with `out` holding `count` elements.
+#[allow(clippy::too_many_arguments)]
+unsafe fn batch<O>(
+    bvh_arena: *const c_void,
+    bvh_bytes: usize,
+    scene: *const CorayScene,
+    rays: *const CorayRay,
+    out: *mut O,
+    count: usize,
+    stack_mem: *mut c_void,
+    stack_bytes: usize,
+    stats: *mut CorayBvhStats,
+    answer: impl Fn(&Bvh, &coray::Ray, &mut [BvhStackItem], &mut BvhStats) -> O,
+) -> CorayStatus {
     guard(|| {
         // SAFETY: forwarded caller contract for every pointer.
         let (t, rays, out) = unsafe {
             (
                 view(bvh_arena, bvh_bytes, carve::scene(scene)?)?.1,
                 carve::input(rays, count)?,
-                carve::output(occluded, count)?,
+                carve::output(out, count)?,
             )
         };
         // SAFETY: forwarded caller contract.
         let stk = unsafe { stack(&t, stack_mem, stack_bytes)? };
         let mut st = BvhStats::default();
         for (r, o) in rays.iter().zip(out.iter_mut()) {
-            *o = t.occluded(&r.into(), stk, &mut st) as u8;
+            *o = answer(&t, &r.into(), stk, &mut st);
         }
         put_stats(stats, &st)
     })

@@ -10,7 +10,7 @@ use crate::{guard, CorayStatus};
 use coray::arena::{
     BvhScratchLayout, ProjArenaHeader, ProjArenaLayout, PROJ_HEADER_BYTES, PROJ_MAGIC, PROJ_VERSION,
 };
-use coray::bvh::{self, Bvh, BvhNode, BvhScratch};
+use coray::bvh::{self, Bvh, BvhNode, BvhScratch, BvhStackItem};
 use coray::proj::lights::{Light, LightPlanes};
 use coray::proj::{
     build_proj, proj_requirements, Criteria, ProjBuilder, ProjHierarchy, ProjPlane, ProjScheme,
@@ -616,28 +616,22 @@ pub unsafe extern "C" fn coray_proj_intersect(
     stack_bytes: usize,
     stats: *mut CorayProjStats,
 ) -> CorayStatus {
-    guard(|| {
-        let s = scheme(scheme_id)?;
-        // SAFETY: forwarded caller contract for every pointer.
-        let (t, rays, hits) = unsafe {
-            (
-                view(proj_arena, proj_bytes, carve::scene(scene)?)?.1,
-                carve::input(rays, count)?,
-                carve::output(hits, count)?,
-            )
-        };
-        // SAFETY: forwarded caller contract.
-        let stk = unsafe { stack(&t.bvh, stack_mem, stack_bytes)? };
-        if rays.iter().any(|r| t.project(&r.into()).is_none()) {
-            return Err(CorayStatus::InvalidParameter);
-        }
-        let mut st = ProjStats::default();
-        for (r, h) in rays.iter().zip(hits.iter_mut()) {
-            let hit = t.intersect(&r.into(), s, stk, &mut st);
-            *h = hit.ok_or(CorayStatus::InternalError)?.into();
-        }
-        put_stats(stats, &st)
-    })
+    // SAFETY: forwarded caller contract.
+    unsafe {
+        batch(
+            proj_arena,
+            proj_bytes,
+            scene,
+            scheme_id,
+            rays,
+            hits,
+            count,
+            stack_mem,
+            stack_bytes,
+            stats,
+            |t, r, sch, stk, st| t.intersect(r, sch, stk, st).map(Into::into),
+        )
+    }
 }
 
 /// Any-hit queries (shadow rays towards the plane's light), as
@@ -659,6 +653,45 @@ pub unsafe extern "C" fn coray_proj_occluded(
     stack_bytes: usize,
     stats: *mut CorayProjStats,
 ) -> CorayStatus {
+    // SAFETY: forwarded caller contract.
+    unsafe {
+        batch(
+            proj_arena,
+            proj_bytes,
+            scene,
+            scheme_id,
+            rays,
+            occluded,
+            count,
+            stack_mem,
+            stack_bytes,
+            stats,
+            |t, r, sch, stk, st| t.occluded(r, sch, stk, st).map(u8::from),
+        )
+    }
+}
+
+/// The body of [`coray_proj_intersect`] and [`coray_proj_occluded`]: views
+/// the arena, carves rays, answers, stack and statistics, refuses the
+/// batch (writing nothing) when a ray does not pass the plane's eye, and
+/// writes `answer` for each ray.
+///
+/// # Safety
+/// As [`coray_proj_intersect`], with `out` holding `count` elements.
+#[allow(clippy::too_many_arguments)]
+unsafe fn batch<O>(
+    proj_arena: *const c_void,
+    proj_bytes: usize,
+    scene: *const CorayScene,
+    scheme_id: u32,
+    rays: *const CorayRay,
+    out: *mut O,
+    count: usize,
+    stack_mem: *mut c_void,
+    stack_bytes: usize,
+    stats: *mut CorayProjStats,
+    answer: impl Fn(&ProjHierarchy, &Ray, ProjScheme, &mut [BvhStackItem], &mut ProjStats) -> Option<O>,
+) -> CorayStatus {
     guard(|| {
         let s = scheme(scheme_id)?;
         // SAFETY: forwarded caller contract for every pointer.
@@ -666,7 +699,7 @@ pub unsafe extern "C" fn coray_proj_occluded(
             (
                 view(proj_arena, proj_bytes, carve::scene(scene)?)?.1,
                 carve::input(rays, count)?,
-                carve::output(occluded, count)?,
+                carve::output(out, count)?,
             )
         };
         // SAFETY: forwarded caller contract.
@@ -676,8 +709,8 @@ pub unsafe extern "C" fn coray_proj_occluded(
         }
         let mut st = ProjStats::default();
         for (r, o) in rays.iter().zip(out.iter_mut()) {
-            let b = t.occluded(&r.into(), s, stk, &mut st);
-            *o = b.ok_or(CorayStatus::InternalError)? as u8;
+            // The rays were checked: a refusal here is a defect.
+            *o = answer(&t, &r.into(), s, stk, &mut st).ok_or(CorayStatus::InternalError)?;
         }
         put_stats(stats, &st)
     })

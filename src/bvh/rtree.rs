@@ -747,17 +747,7 @@ impl<'a> RTree<'a> {
     fn take_farthest(&mut self, slot: u32, extra: &Entry, out: &mut [Entry]) -> usize {
         let nd = self.nodes[slot as usize];
         let leaf = nd.is_leaf();
-        let n = nd.len() as usize + 1;
-        let mut e = [BvhNode::default(); MAX_CHILDREN as usize + 1];
-        for (i, x) in e.iter_mut().enumerate().take(n - 1) {
-            *x = if leaf {
-                let p = self.refs[(nd.first + i as u32) as usize];
-                BvhNode::leaf(&self.entry_box(true, nd.first, i as u32), p, 1)
-            } else {
-                self.nodes[(nd.first + i as u32) as usize]
-            };
-        }
-        e[n - 1] = *extra;
+        let (mut e, n) = self.overfull(slot, extra);
         let all = e[..n].iter().fold(Aabb::EMPTY, |b, x| b.union(&x.bounds()));
         let c = 0.5 * (all.min + all.max);
         let dist = |x: &Entry| {
@@ -781,6 +771,23 @@ impl<'a> RTree<'a> {
         k
     }
 
+    /// The entries of the full node in `slot`, then `extra`, and how many.
+    fn overfull(&self, slot: u32, extra: &Entry) -> ([Entry; MAX_CHILDREN as usize + 1], usize) {
+        let nd = self.nodes[slot as usize];
+        let n = nd.len() as usize + 1;
+        let mut e = [BvhNode::default(); MAX_CHILDREN as usize + 1];
+        for (i, x) in e.iter_mut().enumerate().take(n - 1) {
+            *x = if nd.is_leaf() {
+                let p = self.refs[(nd.first + i as u32) as usize];
+                BvhNode::leaf(&self.entry_box(true, nd.first, i as u32), p, 1)
+            } else {
+                self.nodes[(nd.first + i as u32) as usize]
+            };
+        }
+        e[n - 1] = *extra;
+        (e, n)
+    }
+
     fn put(&mut self, leaf: bool, at: u32, e: &Entry) {
         if leaf {
             self.refs[at as usize] = e.first;
@@ -795,17 +802,7 @@ impl<'a> RTree<'a> {
     fn split(&mut self, slot: u32, extra: &Entry) -> Entry {
         let nd = self.nodes[slot as usize];
         let leaf = nd.is_leaf();
-        let n = nd.len() as usize + 1;
-        let mut e = [BvhNode::default(); MAX_CHILDREN as usize + 1];
-        for (i, x) in e.iter_mut().enumerate().take(n - 1) {
-            *x = if leaf {
-                let p = self.refs[(nd.first + i as u32) as usize];
-                BvhNode::leaf(&self.entry_box(true, nd.first, i as u32), p, 1)
-            } else {
-                self.nodes[(nd.first + i as u32) as usize]
-            };
-        }
-        e[n - 1] = *extra;
+        let (mut e, n) = self.overfull(slot, extra);
         let m = self.params.min_children as usize;
         let second = match self.params.split {
             Split::Quadratic => quadratic_split(&e[..n], m),

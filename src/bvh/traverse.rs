@@ -67,6 +67,24 @@ impl BvhStats {
     }
 }
 
+/// Pushes `item` among the entries pushed since `base` (sorted far to near,
+/// so the nearest pops first).
+#[inline]
+pub(crate) fn push_nearest_last(
+    stack: &mut [BvhStackItem],
+    base: usize,
+    sp: &mut usize,
+    item: BvhStackItem,
+) {
+    let mut i = *sp;
+    while i > base && stack[i - 1].t < item.t {
+        stack[i] = stack[i - 1];
+        i -= 1;
+    }
+    stack[i] = item;
+    *sp += 1;
+}
+
 /// A traversal stack entry: a node whose box the ray enters at `t`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[repr(C)]
@@ -202,13 +220,7 @@ impl Bvh<'_> {
                 st.box_tests += 1;
                 st.box_cost += cost;
                 if let Some(t) = t {
-                    let mut i = sp;
-                    while i > base && stack[i - 1].t < t {
-                        stack[i] = stack[i - 1];
-                        i -= 1;
-                    }
-                    stack[i] = BvhStackItem { node: c, t };
-                    sp += 1;
+                    push_nearest_last(stack, base, &mut sp, BvhStackItem { node: c, t });
                 }
             }
         }

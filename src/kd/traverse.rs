@@ -296,6 +296,15 @@ impl<'a> KdTree<'a> {
         &self.refs[l.first_ref as usize..(l.first_ref + l.ref_count) as usize]
     }
 
+    /// The part of `r`'s segment inside the scene's box
+    /// ([`super::KdInfo::trace_bounds`]): where every traversal starts and ends.
+    #[inline]
+    pub(crate) fn scene_segment(&self, r: &PreparedRay) -> Option<(f32, f32)> {
+        self.info
+            .trace_bounds()
+            .clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max)
+    }
+
     /// Hierarchical traversal from the root; true when the visitor stopped
     /// it. The stack is made only for a ray that meets the scene's box.
     pub(crate) fn walk_hierarchical<V: LeafVisitor, R: Recorder>(
@@ -304,15 +313,8 @@ impl<'a> KdTree<'a> {
         rec: &mut R,
         steps: &mut Steps,
     ) -> bool {
-        let r = *v.ray();
-        match self
-            .info
-            .trace_bounds()
-            .clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max)
-        {
-            Some((t0, t1)) => self.walk_from(v, rec, &mut new_stack(), 0, t0, t1, steps),
-            None => false,
-        }
+        self.scene_segment(v.ray())
+            .is_some_and(|(t0, t1)| self.walk_from(v, rec, &mut new_stack(), 0, t0, t1, steps))
     }
 
     /// [`KdTree::walk_hierarchical`] on the caller's stack.
@@ -323,15 +325,8 @@ impl<'a> KdTree<'a> {
         stack: &mut TraversalStack,
         steps: &mut Steps,
     ) -> bool {
-        let r = *v.ray();
-        match self
-            .info
-            .trace_bounds()
-            .clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max)
-        {
-            Some((t0, t1)) => self.walk_from(v, rec, stack, 0, t0, t1, steps),
-            None => false,
-        }
+        self.scene_segment(v.ray())
+            .is_some_and(|(t0, t1)| self.walk_from(v, rec, stack, 0, t0, t1, steps))
     }
 
     /// TA_B^rec over the subtree of `start`, for the ray's segment
@@ -550,11 +545,7 @@ impl<'a> KdTree<'a> {
 
     fn walk_ropes<V: LeafVisitor>(&self, v: &mut V, steps: &mut Steps) -> bool {
         let r = *v.ray();
-        let Some((t0, t1)) = self
-            .info
-            .trace_bounds()
-            .clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max)
-        else {
+        let Some((t0, t1)) = self.scene_segment(&r) else {
             return false;
         };
         let end = match self.locate(0, r.at(t0), r.dir, steps) {

@@ -373,16 +373,11 @@ pub(crate) fn trace_on(
     let mut v = Closest::new(ray);
     let mut steps = Steps::default();
     let r = v.ray;
-    if tree
-        .info
-        .trace_bounds()
-        .clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max)
-        .is_none()
-    {
+    let Some((_, scene_end)) = tree.scene_segment(&r) else {
         // Outside the scene's box: no step, as in every traversal (the
         // history is already empty).
         return Hit::MISS;
-    }
+    };
     let mut hit_via_termination = false;
     if let (Some(o), None) = (h.termination, record.as_ref()) {
         v.tests += 1;
@@ -412,7 +407,7 @@ pub(crate) fn trace_on(
     if !hit_via_termination && record.is_none() && h.leading_leaves == 0 && h.len > 0 {
         // The rays share no leaf: the cut starts at an interior node, and
         // this ray finds its first leaf there and goes on by ropes.
-        if let Some(done) = ropes_from_first_entry(tree, h, &mut v, &mut steps) {
+        if let Some(done) = ropes_from_first_entry(tree, h, &mut v, scene_end, &mut steps) {
             if !done {
                 v.best = Hit::MISS;
                 tree.walk_hierarchical_on(&mut v, &mut NoRecord, stack, &mut steps);
@@ -470,13 +465,14 @@ pub(crate) fn trace_on(
 }
 
 /// Locates the ray's first leaf from the cut's first entry (an interior
-/// node every ray of the shaft enters first) and walks on by ropes to the
-/// scene's end. `None` when the ray misses that entry (the cut then takes
+/// node every ray of the shaft enters first) and walks on by ropes to
+/// `end`, where the ray leaves the scene's box. `None` when the ray misses that entry (the cut then takes
 /// it); `Some(false)` when it must be redone hierarchically.
 fn ropes_from_first_entry(
     tree: &KdTree,
     h: &Hlcts,
     v: &mut Closest,
+    end: f32,
     steps: &mut Steps,
 ) -> Option<bool> {
     let r = v.ray;
@@ -486,10 +482,6 @@ fn ropes_from_first_entry(
         max: Vec3::from(first.max),
     };
     let (t0, _) = bx.clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max)?;
-    let (_, end) = tree
-        .info
-        .trace_bounds()
-        .clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max)?;
     Some(match tree.locate(first.node, r.at(t0), r.dir, steps) {
         Some(leaf) => tree.rope_walk(v, leaf, end, steps) != RopeEnd::Fallback,
         None => false,

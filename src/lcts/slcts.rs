@@ -248,11 +248,7 @@ pub(crate) fn trace_on(
         }
         // Rounding, or a hit on the leaf's boundary: the sequence decides.
     }
-    let root =
-        tree.info
-            .trace_bounds()
-            .clip_ray(v.ray.origin, v.ray.inv_dir, v.ray.t_min, v.ray.t_max);
-    let done = match root {
+    let done = match tree.scene_segment(&v.ray) {
         None => true,
         Some((t0, t1)) if s.len == 0 => walk_from_entry(tree, s, &mut v, t0, t1, &mut steps),
         Some((_, t1)) => walk_sequence(tree, s, &mut v, t1, &mut steps),

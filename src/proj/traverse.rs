@@ -3,7 +3,7 @@
 //! once per ray; each has its own loop.
 
 use super::{ProjHierarchy, Rect};
-use crate::bvh::traverse::box_test;
+use crate::bvh::traverse::{box_test, push_nearest_last};
 use crate::bvh::{BvhNode, BvhStackItem, BvhStats};
 use crate::geom::{Hit, PreparedRay, Ray};
 use crate::kd::traverse::tie_wins;
@@ -147,13 +147,7 @@ impl ProjHierarchy<'_> {
                 let hit =
                     Self::test::<S>(&self.rects[ci], &self.bvh.nodes[ci], r, q, limit(&best), st);
                 if let Some(t) = hit {
-                    let mut i = sp;
-                    while i > base && stack[i - 1].t < t {
-                        stack[i] = stack[i - 1];
-                        i -= 1;
-                    }
-                    stack[i] = BvhStackItem { node: c, t };
-                    sp += 1;
+                    push_nearest_last(stack, base, &mut sp, BvhStackItem { node: c, t });
                 }
             }
         }
