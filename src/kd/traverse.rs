@@ -132,8 +132,8 @@ pub enum Decision {
 pub(crate) trait Recorder {
     /// An interior node was visited and decided `d`.
     fn interior(&mut self, node: u32, d: Decision);
-    /// A leaf was visited.
-    fn leaf(&mut self, node: u32);
+    /// A leaf was visited: its node and its leaf record index.
+    fn leaf(&mut self, node: u32, leaf: u32);
     /// A node was pushed but not visited: the ray ended first.
     fn unvisited(&mut self, node: u32);
 }
@@ -145,7 +145,7 @@ impl Recorder for NoRecord {
     #[inline(always)]
     fn interior(&mut self, _: u32, _: Decision) {}
     #[inline(always)]
-    fn leaf(&mut self, _: u32) {}
+    fn leaf(&mut self, _: u32, _: u32) {}
     #[inline(always)]
     fn unvisited(&mut self, _: u32) {}
 }
@@ -407,7 +407,7 @@ impl<'a> KdTree<'a> {
                 stack[ex] = ExitPoint { node: far, t, p };
             }
             steps.leaves += 1;
-            rec.leaf(node);
+            rec.leaf(node, nd.index());
             let refs = self.leaf_refs(nd);
             steps.empty += refs.is_empty() as u64;
             if v.visit(&self.scene, refs, stack[ex].t) {

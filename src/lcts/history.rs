@@ -14,14 +14,15 @@ pub const KIND_UNVISITED: u32 = 5;
 
 /// One visited (or pushed) node. Plain data: `word` holds the kind in the
 /// low 3 bits ([`Decision`] as 0 to 3, [`KIND_LEAF`], [`KIND_UNVISITED`])
-/// and, once [`fill_lengths`] ran, the number of records of the node's
-/// subtree above them (so a subtree can be skipped in O(1)).
+/// and above them, for a leaf, its leaf record index, and for an interior
+/// node, once [`fill_lengths`] ran, the number of records of its subtree
+/// (so a subtree can be skipped in O(1)).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[repr(C)]
 pub struct HistoryRecord {
     /// Node index in the tree.
     pub node: u32,
-    /// Kind in bits 0 to 2.
+    /// Kind in bits 0 to 2; leaf record index or subtree length above.
     pub word: u32,
 }
 
@@ -32,10 +33,22 @@ impl HistoryRecord {
         self.word & 7
     }
 
-    /// Records in this node's subtree, itself included.
+    /// Records in this node's subtree, itself included (1 for a leaf or an
+    /// unvisited node).
     #[inline]
     pub fn subtree_len(&self) -> usize {
-        (self.word >> 3) as usize
+        if self.kind() >= KIND_LEAF {
+            1
+        } else {
+            (self.word >> 3) as usize
+        }
+    }
+
+    /// A leaf record's leaf record index in the tree (the `KdLeaf` and
+    /// `KdRopes` it names).
+    #[inline]
+    pub fn leaf_index(&self) -> u32 {
+        self.word >> 3
     }
 }
 
@@ -58,7 +71,9 @@ pub fn fill_lengths(records: &mut [HistoryRecord]) {
     let mut sp = 0usize;
     for i in 0..records.len() {
         let kind = records[i].kind();
-        records[i].word = kind | (1 << 3);
+        if kind < KIND_LEAF {
+            records[i].word = kind | (1 << 3);
+        }
         let a = arity(kind);
         if a > 0 && sp < open.len() {
             open[sp] = (i, a);
@@ -110,9 +125,9 @@ impl<'b> History<'b> {
         (!self.overflow).then(|| &self.records[..self.len])
     }
 
-    fn push(&mut self, node: u32, kind: u32) {
+    fn push(&mut self, node: u32, word: u32) {
         if self.len < self.records.len() {
-            self.records[self.len] = HistoryRecord { node, word: kind };
+            self.records[self.len] = HistoryRecord { node, word };
             self.len += 1;
         } else {
             self.overflow = true;
@@ -126,8 +141,8 @@ impl Recorder for History<'_> {
         self.push(node, d as u32);
     }
     #[inline]
-    fn leaf(&mut self, node: u32) {
-        self.push(node, KIND_LEAF);
+    fn leaf(&mut self, node: u32, leaf: u32) {
+        self.push(node, KIND_LEAF | (leaf << 3));
     }
     #[inline]
     fn unvisited(&mut self, node: u32) {
@@ -139,16 +154,18 @@ impl Recorder for History<'_> {
 /// `h` (cleared first). The hit is exactly that of
 /// [`KdTree::intersect`] with hierarchical traversal.
 pub fn trace_recorded(tree: &KdTree, ray: &Ray, h: &mut History, stats: &mut TraceStats) {
-    trace_recorded_on(tree, ray, h, &mut new_stack(), stats);
+    trace_recorded_on(tree, ray, h, &mut new_stack(), stats, true);
 }
 
-/// [`trace_recorded`] on a traversal stack the caller keeps across rays.
+/// [`trace_recorded`] on a traversal stack the caller keeps across rays;
+/// subtree lengths only with `lengths` (the SLCTS does not use them).
 pub(crate) fn trace_recorded_on(
     tree: &KdTree,
     ray: &Ray,
     h: &mut History,
     stack: &mut TraversalStack,
     stats: &mut TraceStats,
+    lengths: bool,
 ) {
     h.len = 0;
     h.overflow = false;
@@ -163,7 +180,7 @@ pub(crate) fn trace_recorded_on(
     steps.flush(stats);
     stats.prim_tests += v.tests;
     h.hit = v.best;
-    if !h.overflow {
+    if lengths && !h.overflow {
         let n = h.len;
         fill_lengths(&mut h.records[..n]);
     }

@@ -13,6 +13,7 @@
 //! cheaper than walking the cut's subtrees one by one (`coray bench --table
 //! lcts`: lattice HLCTS-2D alpha 0.61 -> 0.52).
 
+use super::guide::{self, Cursor, Paths, FROM_START, MAX_GUIDES};
 use super::history::{fill_lengths, History, HistoryRecord, KIND_LEAF};
 use crate::geom::Aabb;
 use crate::kd::traverse::{new_stack, Closest, NoRecord, RopeEnd, Steps, TraversalStack};
@@ -61,6 +62,20 @@ impl Hlcts<'_> {
     /// The used entries.
     pub fn as_slice(&self) -> &[HlctsEntry] {
         &self.entries[..self.len]
+    }
+
+    /// The paths of the boundary rays `histories` (those the cut was built
+    /// from, in the same order) past the leading leaves, into `buf`.
+    pub fn paths<'p>(
+        &self,
+        histories: &[Option<&[HistoryRecord]>],
+        buf: &'p mut [u32],
+    ) -> Paths<'p> {
+        let after: [u32; MAX_GUIDES] = core::array::from_fn(|j| match self.leading_leaves {
+            0 => FROM_START,
+            k => self.entries[k - 1].ptr[j],
+        });
+        Paths::build(histories, &after, buf)
     }
 }
 
@@ -238,7 +253,15 @@ impl Builder<'_, '_, '_> {
         let nd = self.tree.nodes[node as usize];
         let empty = nd.is_leaf() && self.tree.leaf_refs(nd).is_empty();
         if empty && self.last_empty {
-            return; // unified into the run already in the sequence
+            // Unified into the run already in the sequence, which now ends
+            // here: a ray that goes on by ropes leaves the run from this leaf.
+            if let Some(run) = self.out.entries[..self.out.len].last_mut() {
+                run.node = node;
+                run.min = bx.min.into();
+                run.max = bx.max.into();
+                run.ptr = pos;
+            }
+            return;
         }
         self.last_empty = empty;
         self.push(node, if empty { ENTRY_EMPTY_RUN } else { 0 }, bx, pos);
@@ -378,32 +401,7 @@ pub(crate) fn trace_on(
         // history is already empty).
         return Hit::MISS;
     };
-    let mut hit_via_termination = false;
-    if let (Some(o), None) = (h.termination, record.as_ref()) {
-        v.tests += 1;
-        // Only a hit strictly inside the object's leaf: one on its far
-        // boundary may tie with a primitive of the next leaf.
-        let leaf_exit = h
-            .as_slice()
-            .iter()
-            .take(2)
-            .find(|e| e.flags & ENTRY_EMPTY_RUN == 0)
-            .and_then(|e| {
-                let bx = Aabb {
-                    min: Vec3::from(e.min),
-                    max: Vec3::from(e.max),
-                };
-                bx.clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max)
-            })
-            .map_or(f32::NEG_INFINITY, |(_, t1)| t1);
-        if let Some(hit) = tree.scene.intersect_prim(o as usize, &r, ray.t_max) {
-            if crate::kd::traverse::inside_leaf(hit.t, leaf_exit) {
-                v.best = hit;
-                steps.leaves += h.as_slice().iter().take(2).count() as u64;
-                hit_via_termination = true;
-            }
-        }
-    }
+    let hit_via_termination = record.is_none() && terminated(tree, h, &mut v, &mut steps);
     if !hit_via_termination && record.is_none() && h.leading_leaves == 0 && h.len > 0 {
         // The rays share no leaf: the cut starts at an interior node, and
         // this ray finds its first leaf there and goes on by ropes.
@@ -425,7 +423,8 @@ pub(crate) fn trace_on(
                 steps.empty += 1;
                 if let Some((hist, starts)) = record.as_mut() {
                     starts[e] = hist.len as u32;
-                    crate::kd::traverse::Recorder::leaf(&mut **hist, entry.node);
+                    let leaf = tree.nodes[entry.node as usize].index();
+                    crate::kd::traverse::Recorder::leaf(&mut **hist, entry.node, leaf);
                 }
                 continue;
             }
@@ -462,6 +461,137 @@ pub(crate) fn trace_on(
     steps.flush(stats);
     stats.prim_tests += v.tests;
     v.best
+}
+
+/// Section 4.3.2: the ray hits the termination object, strictly inside its
+/// leaf (a hit on the leaf's far boundary may tie with a primitive of the
+/// next leaf): then that is its hit, after one step per entry up to the
+/// object's leaf. False when there is no termination object or this ray
+/// needs the cut after all (rounding, or such a boundary hit).
+fn terminated(tree: &KdTree, h: &Hlcts, v: &mut Closest, steps: &mut Steps) -> bool {
+    let Some(o) = h.termination else {
+        return false;
+    };
+    let r = v.ray;
+    v.tests += 1;
+    let leaf_exit = h
+        .as_slice()
+        .iter()
+        .take(2)
+        .find(|e| e.flags & ENTRY_EMPTY_RUN == 0)
+        .and_then(|e| {
+            let bx = Aabb {
+                min: Vec3::from(e.min),
+                max: Vec3::from(e.max),
+            };
+            bx.clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max)
+        })
+        .map_or(f32::NEG_INFINITY, |(_, t1)| t1);
+    match tree.scene.intersect_prim(o as usize, &r, r.t_max) {
+        Some(hit) if crate::kd::traverse::inside_leaf(hit.t, leaf_exit) => {
+            v.best = hit;
+            steps.leaves += h.as_slice().iter().take(2).count() as u64;
+            true
+        }
+        _ => false,
+    }
+}
+
+/// Traces `ray` (inside the shaft of `h`) without a history: the
+/// termination object if any; else the leading leaves (the shaft's common
+/// leaf sequence, section 4.3.3), then ropes guided by `paths`
+/// ([`Hlcts::paths`] of the boundary rays, asked first at `nearest`, or
+/// [`Paths::none`]). A cut without leading leaves starts the ray at its
+/// first leaf, guessed from the paths or located from the first entry.
+/// The hit is exactly the hierarchical traversal's.
+pub fn trace_guided(
+    tree: &KdTree,
+    h: &Hlcts,
+    paths: &Paths,
+    nearest: usize,
+    ray: &Ray,
+    stats: &mut TraceStats,
+) -> Hit {
+    trace_guided_on(tree, h, paths, nearest, ray, &mut new_stack(), stats)
+}
+
+/// [`trace_guided`] on a traversal stack the caller keeps across rays.
+pub(crate) fn trace_guided_on(
+    tree: &KdTree,
+    h: &Hlcts,
+    paths: &Paths,
+    nearest: usize,
+    ray: &Ray,
+    stack: &mut TraversalStack,
+    stats: &mut TraceStats,
+) -> Hit {
+    stats.rays += 1;
+    if !ray.is_valid() {
+        return Hit::MISS;
+    }
+    let mut v = Closest::new(ray);
+    let mut steps = Steps::default();
+    let Some((t0, t1)) = tree.scene_segment(&v.ray) else {
+        return Hit::MISS;
+    };
+    if !terminated(tree, h, &mut v, &mut steps) {
+        let mut cur = Cursor::new(paths, nearest);
+        let done = match h.leading_leaves {
+            0 => from_first_entry(tree, h, paths, &mut cur, &mut v, t0, t1, &mut steps),
+            k => {
+                let leaves = h.entries[..k]
+                    .iter()
+                    .map(|e| (e.node, e.flags & ENTRY_EMPTY_RUN != 0));
+                guide::walk_common(tree, leaves, &mut v, t1, paths, &mut cur, &mut steps)
+            }
+        };
+        if !done {
+            v.best = Hit::MISS;
+            tree.walk_hierarchical_on(&mut v, &mut NoRecord, stack, &mut steps);
+        }
+    }
+    steps.flush(stats);
+    stats.prim_tests += v.tests;
+    v.best
+}
+
+/// No leading leaf: the ray's first leaf is one a boundary ray entered
+/// first, or else is located from the cut's first entry (an interior node
+/// every ray of the shaft enters first); then guided ropes to `t1`. False
+/// when the ray must be redone hierarchically.
+#[allow(clippy::too_many_arguments)]
+fn from_first_entry(
+    tree: &KdTree,
+    h: &Hlcts,
+    paths: &Paths,
+    cur: &mut Cursor,
+    v: &mut Closest,
+    t0: f32,
+    t1: f32,
+    steps: &mut Steps,
+) -> bool {
+    let r = v.ray;
+    let p = r.at(t0);
+    let first = match guide::guess_first(tree, paths, cur, p, r.dir, steps) {
+        Some(leaf) => leaf,
+        None => {
+            let Some(e) = h.as_slice().first() else {
+                return false;
+            };
+            let bx = Aabb {
+                min: Vec3::from(e.min),
+                max: Vec3::from(e.max),
+            };
+            let Some((te, _)) = bx.clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max) else {
+                return false;
+            };
+            match tree.locate(e.node, r.at(te), r.dir, steps) {
+                Some(nd) => nd.index(),
+                None => return false,
+            }
+        }
+    };
+    guide::walk(tree, v, first, t1, paths, cur, steps) != RopeEnd::Fallback
 }
 
 /// Locates the ray's first leaf from the cut's first entry (an interior

@@ -5,14 +5,20 @@
 //! - [`history`]: traversal histories of boundary rays, in caller buffers;
 //! - [`slcts`]: the common sequence of leaves (SLCTS), unification of empty
 //!   leaves, the termination object, and tracing a ray along it then by ropes;
+//! - [`hlcts`]: the hierarchical LCTS, the cut where boundary rays stop
+//!   deciding alike, built from a parent cut, with its leading leaves;
+//! - [`guide`]: ropes guided by the boundary rays' leaves past the common part;
 //! - [`image`]: hidden-surface removal by image casting (SLCTS-1D and -2D
-//!   undersampling windows; hierarchical and rope traversal as references).
+//!   undersampling windows, HLCTS-1D and -2D bisection; hierarchical and
+//!   rope traversal as references);
+//! - [`patch`]: patch-to-patch visibility through one HLCTS.
 //!
 //! Every scheme is exact: each pixel gets the primitive and the `t` that
 //! hierarchical traversal gives it. A boundary ray whose history does not
 //! fit its buffer simply shares nothing; its window falls back to ordinary
 //! traversal, so buffer sizes change speed, never results.
 
+pub mod guide;
 pub mod history;
 pub mod hlcts;
 pub mod image;

@@ -108,7 +108,7 @@ pub fn patch_visibility(
         let (ia, ib) = (j / b.len(), j % b.len());
         rays[j] = segment(a[ia], b[ib], eps);
         let mut h = History::new(slot);
-        trace_recorded_on(tree, &rays[j], &mut h, &mut stack, &mut out.boundary);
+        trace_recorded_on(tree, &rays[j], &mut h, &mut stack, &mut out.boundary, true);
         lens[j] = (h.len, h.overflow, h.hit);
     }
     let records: &[HistoryRecord] = scratch.records;

@@ -11,6 +11,7 @@
 //! from a node whose split bounds hold the point strictly makes the root's
 //! decisions, so the hit is still the hierarchical one.
 
+use super::guide::{self, Cursor, Paths, FROM_START, MAX_GUIDES};
 use super::history::{HistoryRecord, KIND_LEAF};
 use crate::kd::traverse::{new_stack, Closest, NoRecord, RopeEnd, Steps, TraversalStack};
 use crate::kd::KdTree;
@@ -33,10 +34,25 @@ pub struct Slcts<'b> {
     pub termination: Option<u32>,
     /// Leaves the sequence covers (before unification).
     pub leaves: usize,
-    /// The deepest node every boundary ray descended through on its way to
-    /// its first leaf: where a ray of a shaft without common leaves starts
-    /// looking for its own first leaf.
+    /// Only for a sequence without leaves: the deepest node every boundary
+    /// ray descended through on its way to its first leaf, where a ray of
+    /// the shaft starts looking for its own first leaf.
     pub entry: Option<EntryNode>,
+    /// Per boundary ray (the first [`MAX_GUIDES`]), the record of the
+    /// sequence's last leaf in its history ([`FROM_START`] without a sequence):
+    /// where its path past the sequence starts.
+    pub last_record: [u32; MAX_GUIDES],
+}
+
+impl Slcts<'_> {
+    /// The boundary rays' paths past the sequence, into `buf`.
+    pub fn paths<'p>(
+        &self,
+        histories: &[Option<&[HistoryRecord]>],
+        buf: &'p mut [u32],
+    ) -> Paths<'p> {
+        Paths::build(histories, &self.last_record, buf)
+    }
 }
 
 /// A node and the open region of space the splits above it bound: a point
@@ -112,48 +128,56 @@ pub fn build<'b>(
         termination: None,
         leaves: 0,
         entry: None,
+        last_record: [FROM_START; MAX_GUIDES],
     };
     if histories.is_empty() || histories.iter().any(|h| h.is_none()) {
         return s;
     }
-    s.entry = entry_node(tree, histories);
     // Walk the leaf records of every history in lockstep.
     let mut pos = [0usize; 8];
     let k = histories.len().min(pos.len());
-    let next_leaf = |h: &[HistoryRecord], p: &mut usize| -> Option<u32> {
+    let next_leaf = |h: &[HistoryRecord], p: &mut usize| -> Option<HistoryRecord> {
         while *p < h.len() {
             let r = h[*p];
             *p += 1;
             if r.kind() == KIND_LEAF {
-                return Some(r.node);
+                return Some(r);
             }
         }
         None
     };
     let mut last_empty = false;
-    while let Some(first) = next_leaf(histories[0].unwrap(), &mut pos[0]) {
+    while let Some(rec) = next_leaf(histories[0].unwrap(), &mut pos[0]) {
+        let first = rec.node;
         let mut same = true;
         for i in 1..k {
-            if next_leaf(histories[i].unwrap(), &mut pos[i]) != Some(first) {
+            if next_leaf(histories[i].unwrap(), &mut pos[i]).map(|r| r.node) != Some(first) {
                 same = false;
             }
         }
         if !same {
             break;
         }
-        let empty = tree.leaf_refs(tree.nodes[first as usize]).is_empty();
+        let empty = tree.leaves[rec.leaf_index() as usize].ref_count == 0;
+        let unified = empty && last_empty && s.len > 0;
+        if !unified && s.len == s.entries.len() {
+            break;
+        }
         s.leaves += 1;
-        if empty && last_empty && s.len > 0 {
+        for (last, p) in s.last_record.iter_mut().zip(&pos[..k]) {
+            *last = *p as u32 - 1;
+        }
+        if unified {
             // Unification: the run grows; its entry now ends here.
             s.entries[s.len - 1] = first | EMPTY_RUN;
             continue;
         }
-        if s.len == s.entries.len() {
-            break;
-        }
         s.entries[s.len] = if empty { first | EMPTY_RUN } else { first };
         s.len += 1;
         last_empty = empty;
+    }
+    if s.len == 0 {
+        s.entry = entry_node(tree, histories);
     }
     s.termination = termination_object(tree, &s, hits, histories);
     s
@@ -205,9 +229,18 @@ fn termination_object(
 
 /// Traces `ray`, which lies inside the shaft of `s`, exactly as
 /// hierarchical traversal would answer: the termination object when there
-/// is one, else the sequence's leaves, then ropes from the last of them.
-pub fn trace(tree: &KdTree, s: &Slcts, ray: &Ray, stats: &mut TraceStats) -> Hit {
-    trace_on(tree, s, ray, &mut new_stack(), stats)
+/// is one, else the sequence's leaves, then ropes from the last of them,
+/// guided by `paths` ([`Slcts::paths`], or [`Paths::none`]) asked first at
+/// path `nearest`.
+pub fn trace(
+    tree: &KdTree,
+    s: &Slcts,
+    paths: &Paths,
+    nearest: usize,
+    ray: &Ray,
+    stats: &mut TraceStats,
+) -> Hit {
+    trace_on(tree, s, paths, nearest, ray, &mut new_stack(), stats)
 }
 
 /// [`trace`] on a traversal stack the caller keeps across rays (used only
@@ -215,6 +248,8 @@ pub fn trace(tree: &KdTree, s: &Slcts, ray: &Ray, stats: &mut TraceStats) -> Hit
 pub(crate) fn trace_on(
     tree: &KdTree,
     s: &Slcts,
+    paths: &Paths,
+    nearest: usize,
     ray: &Ray,
     stack: &mut TraversalStack,
     stats: &mut TraceStats,
@@ -248,10 +283,18 @@ pub(crate) fn trace_on(
         }
         // Rounding, or a hit on the leaf's boundary: the sequence decides.
     }
+    let mut cur = Cursor::new(paths, nearest);
     let done = match tree.scene_segment(&v.ray) {
         None => true,
-        Some((t0, t1)) if s.len == 0 => walk_from_entry(tree, s, &mut v, t0, t1, &mut steps),
-        Some((_, t1)) => walk_sequence(tree, s, &mut v, t1, &mut steps),
+        Some((t0, t1)) if s.len == 0 => {
+            walk_from_entry(tree, s, paths, &mut cur, &mut v, t0, t1, &mut steps)
+        }
+        Some((_, t1)) => {
+            let seq = s.entries[..s.len]
+                .iter()
+                .map(|&e| (e & !EMPTY_RUN, e & EMPTY_RUN != 0));
+            guide::walk_common(tree, seq, &mut v, t1, paths, &mut cur, &mut steps)
+        }
     };
     if !done {
         v.best = Hit::MISS;
@@ -262,68 +305,38 @@ pub(crate) fn trace_on(
     v.best
 }
 
-/// No common leaf: the ray finds its first leaf from the shaft's entry
-/// node (one step for the test that its entry point lies there), then goes
-/// on by ropes. False when it must be redone hierarchically.
+/// No common leaf: the ray's first leaf is one the boundary rays entered
+/// first, or else found from the shaft's entry node (one step for the test
+/// that its entry point lies there); then it goes on by ropes. False when
+/// it must be redone hierarchically.
+#[allow(clippy::too_many_arguments)]
 fn walk_from_entry(
     tree: &KdTree,
     s: &Slcts,
+    paths: &Paths,
+    cur: &mut Cursor,
     v: &mut Closest,
     t0: f32,
     t1: f32,
     steps: &mut Steps,
 ) -> bool {
-    let Some(e) = s.entry else {
-        return false;
-    };
     let r = v.ray;
     let p = r.at(t0);
-    steps.interior += 1;
-    if !e.holds(p) {
-        return false;
-    }
-    match tree.locate(e.node, p, r.dir, steps) {
-        Some(first) => tree.rope_walk(v, first, t1, steps) != RopeEnd::Fallback,
-        None => false,
-    }
-}
-
-/// The sequence, then ropes. False when the ray must be redone
-/// hierarchically (it lies in a split plane it crosses, or the sequence is empty).
-fn walk_sequence(tree: &KdTree, s: &Slcts, v: &mut Closest, t1: f32, steps: &mut Steps) -> bool {
-    if s.len == 0 {
-        return false;
-    }
-    for &e in &s.entries[..s.len] {
-        steps.leaves += 1;
-        let nd = tree.nodes[(e & !EMPTY_RUN) as usize];
-        if e & EMPTY_RUN != 0 {
-            steps.empty += 1;
-            continue;
-        }
-        // The leaf's exit matters only once something is hit: test first.
-        crate::kd::traverse::LeafVisitor::visit(
-            v,
-            &tree.scene,
-            tree.leaf_refs(nd),
-            f32::NEG_INFINITY,
-        );
-        if v.best.is_hit() {
-            let t_exit = tree.leaf_exit(&v.ray, nd).0.min(t1);
-            if crate::kd::traverse::inside_leaf(v.best.t, t_exit) {
-                return true;
+    let first = match guide::guess_first(tree, paths, cur, p, r.dir, steps) {
+        Some(leaf) => leaf,
+        None => {
+            let Some(e) = s.entry else {
+                return false;
+            };
+            steps.interior += 1;
+            if !e.holds(p) {
+                return false;
+            }
+            match tree.locate(e.node, p, r.dir, steps) {
+                Some(nd) => nd.index(),
+                None => return false,
             }
         }
-    }
-    let r = v.ray;
-    let last = tree.nodes[(s.entries[s.len - 1] & !EMPTY_RUN) as usize];
-    let (t_exit, face) = tree.leaf_exit(&r, last);
-    if t_exit > t1 {
-        return true;
-    }
-    match tree.rope_next(&r, last, t_exit, face, steps) {
-        Ok(None) => true,
-        Ok(Some(next)) => tree.rope_walk(v, next, t1, steps) != RopeEnd::Fallback,
-        Err(()) => false,
-    }
+    };
+    guide::walk(tree, v, first, t1, paths, cur, steps) != RopeEnd::Fallback
 }

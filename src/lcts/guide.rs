@@ -1,0 +1,375 @@
+//! Guided ropes: where a ray of a shaft goes on past the shaft's common
+//! part, the boundary rays' own leaves predict its next leaf.
+//!
+//! A rope leads to the smallest node covering a leaf's face; a plain rope
+//! walk then descends from that node to the leaf holding the exit point,
+//! about two interior steps per leaf on the SPD scenes. A ray between the
+//! boundary rays of a narrow shaft mostly crosses the leaves they crossed,
+//! in the same order. So each ray keeps, per boundary ray, its place on that
+//! ray's path of leaves and first tries the leaf the nearest boundary ray
+//! entered next: if that leaf's box holds the exit point (with point
+//! location's rule for points on a split plane), it is the leaf point
+//! location would find, since the leaves partition the tree's box. A right
+//! guess visits one node, the leaf itself; a wrong one costs a step and the
+//! ray descends by its rope as usual. The hits are those of a plain rope
+//! walk, so exactly those of hierarchical traversal.
+
+use super::history::{HistoryRecord, KIND_LEAF, KIND_UNVISITED};
+use crate::geom::PreparedRay;
+use crate::kd::traverse::{Closest, LeafVisitor, RopeEnd, Steps};
+use crate::kd::{KdNode, KdRopes, KdTree, NO_NODE};
+use crate::Vec3;
+
+/// Most boundary rays that guide a ray.
+pub const MAX_GUIDES: usize = 4;
+
+/// Fills a path's slots past its last leaf: no leaf has this index, so a
+/// cursor there never matches and the ray has left that path.
+const END: u32 = u32::MAX;
+
+/// Start the paths at a history's first record.
+pub const FROM_START: u32 = u32::MAX;
+
+/// The leaves (leaf record indices) each boundary ray crossed past the
+/// shaft's common part, in order, in a caller buffer: path `j` in slots
+/// `j * cap ..`, closed by two end markers.
+#[derive(Debug)]
+pub struct Paths<'b> {
+    slots: &'b [u32],
+    cap: usize,
+    count: usize,
+    /// Per path, the slot of its first [`END`].
+    ends: [u32; MAX_GUIDES],
+}
+
+impl Paths<'static> {
+    /// No paths: rays walk plain ropes.
+    pub fn none() -> Paths<'static> {
+        Paths {
+            slots: &[],
+            cap: 0,
+            count: 0,
+            ends: [0; MAX_GUIDES],
+        }
+    }
+}
+
+impl<'b> Paths<'b> {
+    /// The leaves after record `after[j]` (or from the start, for
+    /// [`FROM_START`]) of each history, up to [`MAX_GUIDES`] of them, into
+    /// `buf` (an equal share each; a path that does not fit is cut short,
+    /// which only makes guesses run out sooner). A history that overflowed
+    /// gives an empty path.
+    pub fn build(
+        histories: &[Option<&[HistoryRecord]>],
+        after: &[u32],
+        buf: &'b mut [u32],
+    ) -> Paths<'b> {
+        let count = histories.len().min(after.len()).min(MAX_GUIDES);
+        let cap = buf.len().checked_div(count).unwrap_or(0);
+        if cap < 2 {
+            return Paths::none();
+        }
+        let mut ends = [0; MAX_GUIDES];
+        for j in 0..count {
+            let out = &mut buf[j * cap..(j + 1) * cap];
+            let room = cap - 2;
+            let mut n = 0;
+            if let Some(h) = histories[j] {
+                let start = if after[j] == FROM_START {
+                    0
+                } else {
+                    after[j] as usize + 1
+                };
+                for r in h.iter().skip(start) {
+                    let kind = r.kind();
+                    if kind == KIND_UNVISITED || n == room {
+                        break;
+                    }
+                    if kind == KIND_LEAF {
+                        out[n] = r.leaf_index();
+                        n += 1;
+                    }
+                }
+            }
+            out[n] = END;
+            out[n + 1] = END;
+            ends[j] = (j * cap + n) as u32;
+        }
+        Paths {
+            slots: buf,
+            cap,
+            count,
+            ends,
+        }
+    }
+
+    /// Boundary rays with a path.
+    pub fn count(&self) -> usize {
+        self.count
+    }
+}
+
+/// One ray's place on the paths: the slot of the leaf it would meet next on
+/// the path it follows (past every path once it has lost them), and
+/// the order in which paths are searched when it leaves the one it follows.
+#[derive(Clone, Copy, Debug)]
+pub struct Cursor {
+    next: u32,
+    order: [u8; MAX_GUIDES],
+    count: u8,
+}
+
+impl Cursor {
+    /// A ray at the start of path `nearest` (the boundary ray closest to
+    /// it); the others are searched in index order.
+    #[inline]
+    pub fn new(paths: &Paths, nearest: usize) -> Cursor {
+        let count = paths.count;
+        if count == 0 {
+            return Cursor {
+                next: 0,
+                order: [0; MAX_GUIDES],
+                count: 0,
+            };
+        }
+        let first = nearest.min(count - 1);
+        let mut order = [0u8; MAX_GUIDES];
+        order[0] = first as u8;
+        let mut k = 1;
+        for j in 0..count {
+            if j != first {
+                order[k] = j as u8;
+                k += 1;
+            }
+        }
+        Cursor {
+            next: (first * paths.cap) as u32,
+            order,
+            count: count as u8,
+        }
+    }
+
+    /// The leaf the followed path enters next, if it holds `p` (a wrong
+    /// guess costs a step: its box was read).
+    #[inline]
+    fn guess(
+        &mut self,
+        tree: &KdTree,
+        paths: &Paths,
+        from: u32,
+        p: Vec3,
+        d: Vec3,
+        steps: &mut Steps,
+    ) -> Option<u32> {
+        let leaf = *paths.slots.get(self.next as usize)?;
+        if leaf != END {
+            if holds(&tree.ropes[leaf as usize], p, d) {
+                self.next += 1;
+                return Some(leaf);
+            }
+            steps.leaves += 1;
+        }
+        // The other paths through `from`: where they went next.
+        let mut tried = leaf;
+        for &j in &self.order[..self.count as usize] {
+            let (lo, hi) = (j as usize * paths.cap, paths.ends[j as usize] as usize);
+            let Some(i) = paths.slots[lo..hi].iter().position(|&l| l == from) else {
+                continue;
+            };
+            let cand = paths.slots[lo + i + 1];
+            if cand == END || cand == tried {
+                continue;
+            }
+            if holds(&tree.ropes[cand as usize], p, d) {
+                self.next = (lo + i + 2) as u32;
+                return Some(cand);
+            }
+            steps.leaves += 1;
+            tried = cand;
+        }
+        None
+    }
+
+    /// The ray entered `leaf`, found by its rope: follow the first path (in
+    /// search order) that entered it too, from there on; none: stop guessing.
+    fn resync(&mut self, paths: &Paths, leaf: u32) {
+        for &j in &self.order[..self.count as usize] {
+            let (from, to) = (j as usize * paths.cap, paths.ends[j as usize] as usize);
+            if let Some(i) = paths.slots[from..to].iter().position(|&l| l == leaf) {
+                self.next = (from + i + 1) as u32;
+                return;
+            }
+        }
+        self.next = u32::MAX;
+    }
+}
+
+/// Whether leaf box `rp` holds `p` as point location decides: a point on a
+/// split plane belongs to the side the ray heads into (direction `d`), and
+/// one on a plane parallel to the ray to neither (location then fails, and
+/// so does this). The root box's faces count as split planes here.
+#[inline]
+pub fn holds(rp: &KdRopes, p: Vec3, d: Vec3) -> bool {
+    let mut inside = true;
+    for a in 0..3 {
+        let (lo, hi, x) = (rp.min[a], rp.max[a], p[a]);
+        // `&`, not `&&`: six comparisons cost less than their branches.
+        inside &= ((lo < x) | ((lo == x) & (d[a] > 0.0))) & ((x < hi) | ((x == hi) & (d[a] < 0.0)));
+    }
+    inside
+}
+
+/// The ray's first leaf, point `p` (where it enters the scene's box) found
+/// among the paths' first leaves. The root box's faces are no split: a
+/// point just outside one (the traced box is a little wider) is located as
+/// if on it.
+pub(crate) fn guess_first(
+    tree: &KdTree,
+    paths: &Paths,
+    cur: &mut Cursor,
+    p: Vec3,
+    d: Vec3,
+    steps: &mut Steps,
+) -> Option<u32> {
+    let b = tree.info.bounds();
+    let p = p.clamp(b.min, b.max);
+    // Every path's first leaf, nearest first: the ray's first leaf is
+    // where its descent parts from theirs, so often one of them.
+    let mut tried = [END; MAX_GUIDES];
+    for (k, &j) in cur.order[..cur.count as usize].iter().enumerate() {
+        let from = j as usize * paths.cap;
+        let leaf = paths.slots[from];
+        if leaf == END || tried[..k].contains(&leaf) {
+            continue;
+        }
+        tried[k] = leaf;
+        if holds(&tree.ropes[leaf as usize], p, d) {
+            cur.next = from as u32 + 1;
+            return Some(leaf);
+        }
+        steps.leaves += 1;
+    }
+    None
+}
+
+/// Visits a shaft's common leaves (`(node, run)` in order; a run of empty
+/// leaves, named by its last leaf, is one step and no test), then goes on
+/// by guided ropes from the last of them to `t1`. False when the ray must
+/// be redone hierarchically (it lies in a split plane it crosses, or there
+/// is no leaf).
+pub(crate) fn walk_common(
+    tree: &KdTree,
+    leaves: impl Iterator<Item = (u32, bool)>,
+    v: &mut Closest,
+    t1: f32,
+    paths: &Paths,
+    cur: &mut Cursor,
+    steps: &mut Steps,
+) -> bool {
+    let mut last = None;
+    for (node, run) in leaves {
+        steps.leaves += 1;
+        let nd = tree.nodes[node as usize];
+        last = Some(nd);
+        if run {
+            steps.empty += 1;
+            continue;
+        }
+        // The leaf's exit matters only once something is hit: test first.
+        v.visit(&tree.scene, tree.leaf_refs(nd), f32::NEG_INFINITY);
+        if v.best.is_hit() {
+            let t_exit = tree.leaf_exit(&v.ray, nd).0.min(t1);
+            if crate::kd::traverse::inside_leaf(v.best.t, t_exit) {
+                return true;
+            }
+        }
+    }
+    let Some(last) = last else {
+        return false;
+    };
+    let r = v.ray;
+    let (t_exit, face) = tree.leaf_exit(&r, last);
+    if t_exit > t1 {
+        return true;
+    }
+    match next(tree, &r, last.index(), t_exit, face, paths, cur, steps) {
+        Ok(None) => true,
+        Ok(Some(n)) => walk(tree, v, n, t1, paths, cur, steps) != RopeEnd::Fallback,
+        Err(()) => false,
+    }
+}
+
+/// Rope walk from leaf `first` (a leaf record index, not yet visited),
+/// guided by `paths`, until the visitor stops or the segment ends at `t1`.
+pub(crate) fn walk(
+    tree: &KdTree,
+    v: &mut Closest,
+    first: u32,
+    t1: f32,
+    paths: &Paths,
+    cur: &mut Cursor,
+    steps: &mut Steps,
+) -> RopeEnd {
+    let r = v.ray;
+    let mut leaf = first;
+    // A rope walk crosses each leaf at most once; the bound only guards
+    // against a corrupt arena.
+    for _ in 0..=tree.leaves.len() {
+        let nd = KdNode::leaf(leaf);
+        steps.leaves += 1;
+        let refs = tree.leaf_refs(nd);
+        steps.empty += refs.is_empty() as u64;
+        let (t_exit, face) = tree.leaf_exit(&r, nd);
+        if v.visit(&tree.scene, refs, t_exit.min(t1)) {
+            return RopeEnd::Stopped;
+        }
+        if t_exit > t1 {
+            return RopeEnd::Exited;
+        }
+        match next(tree, &r, leaf, t_exit, face, paths, cur, steps) {
+            Ok(Some(n)) => leaf = n,
+            Ok(None) => return RopeEnd::Exited,
+            Err(()) => return RopeEnd::Fallback,
+        }
+    }
+    RopeEnd::Fallback
+}
+
+/// The leaf beyond face `face` of leaf `leaf` where the ray goes on after
+/// `t_exit`, guessed from the paths or else found down the rope:
+/// `Ok(None)` at the scene's boundary, `Err(())` when the ray lies in a
+/// split plane there.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub(crate) fn next(
+    tree: &KdTree,
+    r: &PreparedRay,
+    leaf: u32,
+    t_exit: f32,
+    face: usize,
+    paths: &Paths,
+    cur: &mut Cursor,
+    steps: &mut Steps,
+) -> Result<Option<u32>, ()> {
+    let rp = &tree.ropes[leaf as usize];
+    let rope = rp.neighbor[face];
+    if rope == NO_NODE {
+        return Ok(None);
+    }
+    let a = face / 2;
+    let mut p = r.at(t_exit);
+    p[a] = if face % 2 == 1 { rp.max[a] } else { rp.min[a] };
+    if let Some(n) = cur.guess(tree, paths, leaf, p, r.dir, steps) {
+        return Ok(Some(n));
+    }
+    match tree.locate(rope, p, r.dir, steps) {
+        Some(nd) => {
+            if cur.next != u32::MAX {
+                cur.resync(paths, nd.index());
+            }
+            Ok(Some(nd.index()))
+        }
+        None => Err(()),
+    }
+}
