@@ -191,6 +191,17 @@ impl Cursor {
         None
     }
 
+    /// The ray entered `leaf`, the one its rope leads to: on along the
+    /// followed path if that is where it went too, else as [`Cursor::resync`].
+    #[inline]
+    fn follow(&mut self, paths: &Paths, leaf: u32) {
+        match paths.slots.get(self.next as usize) {
+            Some(&l) if l == leaf => self.next += 1,
+            Some(_) => self.resync(paths, leaf),
+            None => {}
+        }
+    }
+
     /// The ray entered `leaf`, found by its rope: follow the first path (in
     /// search order) that entered it too, from there on; none: stop guessing.
     fn resync(&mut self, paths: &Paths, leaf: u32) {
@@ -356,6 +367,12 @@ pub(crate) fn next(
     let rope = rp.neighbor[face];
     if rope == NO_NODE {
         return Ok(None);
+    }
+    // A rope that leads straight to a leaf needs no guess.
+    let target = tree.nodes[rope as usize];
+    if target.is_leaf() {
+        cur.follow(paths, target.index());
+        return Ok(Some(target.index()));
     }
     let a = face / 2;
     let mut p = r.at(t_exit);
