@@ -103,11 +103,6 @@ impl<'b> Paths<'b> {
             ends,
         }
     }
-
-    /// Boundary rays with a path.
-    pub fn count(&self) -> usize {
-        self.count
-    }
 }
 
 /// One ray's place on the paths: the slot of the leaf it would meet next on
