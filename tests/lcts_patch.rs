@@ -39,6 +39,7 @@ fn visible_fraction_equals_brute_force() {
             let n = 5;
             let mut records = vec![HistoryRecord::default(); 16 * 512];
             let mut hl = vec![HlctsEntry::default(); 16 * 512];
+            let mut paths = vec![0u32; 16 * 512];
             let got = patch_visibility(
                 &tree,
                 &a,
@@ -48,6 +49,7 @@ fn visible_fraction_equals_brute_force() {
                 PatchScratch {
                     records: &mut records,
                     hlcts: &mut hl,
+                    paths: &mut paths,
                 },
             )
             .unwrap();

@@ -270,10 +270,18 @@ pub unsafe extern "C" fn coray_kdtree_cast_image(
 /// `history_capacity` records.
 #[no_mangle]
 pub extern "C" fn coray_patch_requirements(history_capacity: u32) -> usize {
-    let cap = history_capacity.max(1) as usize;
-    let records = lcts::hlcts::MAX_RAYS * cap * core::mem::size_of::<lcts::HistoryRecord>();
-    coray::arena::align_up(records)
-        + lcts::hlcts::MAX_RAYS * cap * core::mem::size_of::<lcts::hlcts::HlctsEntry>()
+    patch_layout(history_capacity.max(1) as usize).2
+}
+
+/// Offsets of the cut's entries and of the paths in a patch scratch of
+/// history capacity `cap`, and its bytes: `[records | entries | paths]`,
+/// each part 16-byte aligned.
+fn patch_layout(cap: usize) -> (usize, usize, usize) {
+    let k = lcts::hlcts::MAX_RAYS * cap;
+    let entries = coray::arena::align_up(k * core::mem::size_of::<lcts::HistoryRecord>());
+    let paths =
+        entries + coray::arena::align_up(k * core::mem::size_of::<lcts::hlcts::HlctsEntry>());
+    (entries, paths, paths + coray::arena::align_up(k * 4))
 }
 
 /// Visibility between two convex patches (3 or 4 vertices each, `x y z`
@@ -324,23 +332,29 @@ pub unsafe extern "C" fn coray_kdtree_patch_visibility(
         let pb: [Vec3; 4] = core::array::from_fn(|i| Vec3::from(*b.get(i).unwrap_or(&b[0])));
         let base = scratch.cast::<u8>();
         check_arena(base)?;
-        // Split the scratch: records first, then entries, in the proportion
-        // of coray_patch_requirements.
-        let rec_size = core::mem::size_of::<lcts::HistoryRecord>();
-        let ent_size = core::mem::size_of::<lcts::hlcts::HlctsEntry>();
+        // Split the scratch as coray_patch_requirements lays it out, for
+        // the largest history capacity that fits.
         let k = lcts::hlcts::MAX_RAYS;
-        let cap = scratch_bytes / (k * (rec_size + ent_size) + 16);
+        let per_cap = k
+            * (core::mem::size_of::<lcts::HistoryRecord>()
+                + core::mem::size_of::<lcts::hlcts::HlctsEntry>()
+                + 4);
+        let mut cap = scratch_bytes / per_cap;
+        while cap > 0 && patch_layout(cap).2 > scratch_bytes {
+            cap -= 1;
+        }
         if cap == 0 {
             return Err(CorayStatus::ArenaTooSmall);
         }
-        let rec_bytes = coray::arena::align_up(k * cap * rec_size);
-        // SAFETY: aligned arena (checked); both parts lie within
-        // scratch_bytes (cap chosen so that rec_bytes + k*cap*ent_size fits)
-        // and do not overlap; lent exclusively by the caller.
+        let (entries_at, paths_at, _) = patch_layout(cap);
+        // SAFETY: aligned arena (checked); the three parts lie within
+        // scratch_bytes (patch_layout(cap) fits) at 16-aligned offsets and do
+        // not overlap; lent exclusively by the caller.
         let sc = unsafe {
             patch::PatchScratch {
                 records: slice_mut(base, 0, k * cap),
-                hlcts: slice_mut(base, rec_bytes, k * cap),
+                hlcts: slice_mut(base, entries_at, k * cap),
+                paths: slice_mut(base, paths_at, k * cap),
             }
         };
         let r = patch::patch_visibility(

@@ -20,8 +20,9 @@ use crate::kd::traverse::{Closest, LeafVisitor, RopeEnd, Steps};
 use crate::kd::{KdNode, KdRopes, KdTree, NO_NODE};
 use crate::Vec3;
 
-/// Most boundary rays that guide a ray.
-pub const MAX_GUIDES: usize = 4;
+/// Most boundary rays that guide a ray: all of a patch shaft's
+/// ([`super::hlcts::MAX_RAYS`]); an image window has four.
+pub const MAX_GUIDES: usize = super::hlcts::MAX_RAYS;
 
 /// Fills a path's slots past its last leaf: no leaf has this index, so a
 /// cursor there never matches and the ray has left that path.

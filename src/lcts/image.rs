@@ -18,7 +18,6 @@
 //! Past the common part, ropes are guided by the boundary rays' own leaves
 //! ([`super::guide`]): a ray asks the nearest corner first.
 
-use super::guide::MAX_GUIDES;
 use super::history::{trace_recorded_on, History, HistoryRecord};
 use super::hlcts::{self, Boundary, HlctsEntry, Source, MAX_RAYS};
 use super::slcts;
@@ -141,7 +140,7 @@ pub fn image_requirements(
         let per_cut = MAX_RAYS * history_capacity;
         return ImageRequirements {
             records: slots * history_capacity,
-            entries: MAX_GUIDES * history_capacity,
+            entries: CORNERS * history_capacity,
             corners: 0,
             starts: slots * per_cut,
             hlcts: (levels + 1) * per_cut,
@@ -161,13 +160,17 @@ pub fn image_requirements(
         entries: if cols == 0 {
             0
         } else {
-            (1 + MAX_GUIDES) * history_capacity
+            (1 + CORNERS) * history_capacity
         },
         corners: rows * cols,
         starts: 0,
         hlcts: 0,
     }
 }
+
+/// Boundary rays of a window or rectangle (two for an interval): their
+/// paths guide its rays.
+const CORNERS: usize = 4;
 
 /// HLCTS-2D casts rectangles of at most this many pixels from their cut
 /// without splitting them: their rays follow the leading leaves, then ropes
@@ -312,7 +315,7 @@ pub fn cast_image(
             // The sequence's share of `entries`, and the corners' paths'.
             let (seq_buf, path_buf) = scratch
                 .entries
-                .split_at_mut(scratch.entries.len() / (1 + MAX_GUIDES));
+                .split_at_mut(scratch.entries.len() / (1 + CORNERS));
             let mut hist_lens_top = HistRow { info: ct };
             let mut hist_lens_bottom = HistRow { info: cb };
             let corner_rows = if m == 1 {

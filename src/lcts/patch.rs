@@ -1,8 +1,10 @@
 //! Patch-to-patch visibility (section 5.1): the segments between two convex
 //! patches form a shaft whose boundary rays are the segments between their
 //! vertices. One HLCTS built from those starts every segment between the
-//! patches; the visible fraction is the share of sample segments that meet
-//! nothing.
+//! patches: along its leading leaves, then by ropes guided by the boundary
+//! segment nearest to it (the one between the sample points' nearest
+//! vertices). The visible fraction is the share of sample segments that
+//! meet nothing.
 
 use super::history::{trace_recorded_on, History, HistoryRecord};
 use super::hlcts::{self, Boundary, HlctsEntry, Source, MAX_RAYS};
@@ -21,6 +23,9 @@ pub struct PatchScratch<'b> {
     pub records: &'b mut [HistoryRecord],
     /// The cut: `MAX_RAYS` times a history slot's records never runs out.
     pub hlcts: &'b mut [HlctsEntry],
+    /// The boundary segments' paths past the cut's leading leaves: as many
+    /// `u32` as `records` has records (fewer only guides less).
+    pub paths: &'b mut [u32],
 }
 
 /// What a visibility query found and did.
@@ -66,6 +71,20 @@ pub fn patch_point(poly: &[Vec3], u: f32, v: f32) -> Vec3 {
             let b = poly[3].lerp(poly[2], u);
             a.lerp(b, v)
         }
+    }
+}
+
+/// The vertex of a polygon of `n` vertices nearest (in [`patch_point`]'s
+/// parameters) to the point at `u`, `v`.
+fn nearest_vertex(n: usize, u: f32, v: f32) -> usize {
+    match (n, u < 0.5, v < 0.5) {
+        (3, true, _) => 0,
+        (3, false, true) => 1,
+        (3, false, false) => 2,
+        (_, true, true) => 0,
+        (_, false, true) => 1,
+        (_, false, false) => 2,
+        (_, true, false) => 3,
     }
 }
 
@@ -127,6 +146,9 @@ pub fn patch_visibility(
     let root = [hlcts::root_entry(tree)];
     let cut = hlcts::build(tree, &root, &bounds[..k], scratch.hlcts);
     out.cut_len = cut.len as u32;
+    let histories: [Option<&[HistoryRecord]>; MAX_RAYS] =
+        core::array::from_fn(|j| bounds[j].records);
+    let paths = cut.paths(&histories[..k], scratch.paths);
     let step = |i: u32| {
         if n <= 1 {
             0.5
@@ -135,14 +157,19 @@ pub fn patch_visibility(
         }
     };
     for ia in 0..n * n {
-        let p = patch_point(a, step(ia % n), step(ia / n));
+        let (ua, va) = (step(ia % n), step(ia / n));
+        let p = patch_point(a, ua, va);
         for ib in 0..n * n {
-            let q = patch_point(b, step(ib % n), step(ib / n));
-            let hit = hlcts::trace_on(
+            let (ub, vb) = (step(ib % n), step(ib / n));
+            let q = patch_point(b, ub, vb);
+            let nearest =
+                nearest_vertex(a.len(), ua, va) * b.len() + nearest_vertex(b.len(), ub, vb);
+            let hit = hlcts::trace_guided_on(
                 tree,
                 &cut,
+                &paths,
+                nearest,
                 &segment(p, q, eps),
-                None,
                 &mut stack,
                 &mut out.trace,
             );
