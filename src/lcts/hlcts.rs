@@ -401,25 +401,12 @@ pub(crate) fn trace_on(
     let mut v = Closest::new(ray);
     let mut steps = Steps::default();
     let r = v.ray;
-    let Some((_, scene_end)) = tree.scene_segment(&r) else {
+    if tree.scene_segment(&r).is_none() {
         // Outside the scene's box: no step, as in every traversal (the
         // history is already empty).
         return Hit::MISS;
-    };
-    let hit_via_termination = record.is_none() && terminated(tree, h, &mut v, &mut steps);
-    if !hit_via_termination && record.is_none() && h.leading_leaves == 0 && h.len > 0 {
-        // The rays share no leaf: the cut starts at an interior node, and
-        // this ray finds its first leaf there and goes on by ropes.
-        if let Some(done) = ropes_from_first_entry(tree, h, &mut v, scene_end, &mut steps) {
-            if !done {
-                v.best = Hit::MISS;
-                tree.walk_hierarchical_on(&mut v, &mut NoRecord, stack, &mut steps);
-            }
-            steps.flush(stats);
-            stats.prim_tests += v.tests;
-            return v.best;
-        }
     }
+    let hit_via_termination = record.is_none() && terminated(tree, h, &mut v, &mut steps);
     if !hit_via_termination {
         for (e, entry) in h.as_slice().iter().enumerate() {
             if entry.flags & ENTRY_EMPTY_RUN != 0 {
@@ -599,26 +586,3 @@ fn from_first_entry(
     guide::walk(tree, v, first, t1, paths, cur, steps) != RopeEnd::Fallback
 }
 
-/// Locates the ray's first leaf from the cut's first entry (an interior
-/// node every ray of the shaft enters first) and walks on by ropes to
-/// `end`, where the ray leaves the scene's box. `None` when the ray misses that entry (the cut then takes
-/// it); `Some(false)` when it must be redone hierarchically.
-fn ropes_from_first_entry(
-    tree: &KdTree,
-    h: &Hlcts,
-    v: &mut Closest,
-    end: f32,
-    steps: &mut Steps,
-) -> Option<bool> {
-    let r = v.ray;
-    let first = h.as_slice().first()?;
-    let bx = Aabb {
-        min: Vec3::from(first.min),
-        max: Vec3::from(first.max),
-    };
-    let (t0, _) = bx.clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max)?;
-    Some(match tree.locate(first.node, r.at(t0), r.dir, steps) {
-        Some(leaf) => tree.rope_walk(v, leaf, end, steps) != RopeEnd::Fallback,
-        None => false,
-    })
-}
