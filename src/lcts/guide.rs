@@ -16,9 +16,9 @@
 
 use super::history::{HistoryRecord, KIND_LEAF, KIND_UNVISITED};
 use crate::geom::PreparedRay;
-use crate::kd::traverse::{Closest, LeafVisitor, RopeEnd, Steps};
+use crate::kd::traverse::{Closest, LeafVisitor, NoRecord, RopeEnd, Steps, TraversalStack};
 use crate::kd::{KdNode, KdRopes, KdTree, NO_NODE};
-use crate::Vec3;
+use crate::{Hit, TraceStats, Vec3};
 
 /// Most boundary rays that guide a ray: all of a patch shaft's
 /// ([`super::hlcts::MAX_RAYS`]); an image window has four.
@@ -231,7 +231,7 @@ pub fn holds(rp: &KdRopes, p: Vec3, d: Vec3) -> bool {
 /// among the paths' first leaves. The root box's faces are no split: a
 /// point just outside one (the traced box is a little wider) is located as
 /// if on it.
-pub(crate) fn guess_first(
+fn guess_first(
     tree: &KdTree,
     paths: &Paths,
     cur: &mut Cursor,
@@ -258,6 +258,54 @@ pub(crate) fn guess_first(
         steps.leaves += 1;
     }
     None
+}
+
+/// A ray of a shaft without common leaves: its first leaf is one a
+/// boundary ray entered first (where the ray meets the scene's box at
+/// `t0`), or else `locate` finds it from the shaft's own starting node;
+/// then guided ropes to `t1`. False when the ray must be redone
+/// hierarchically.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn walk_from_first(
+    tree: &KdTree,
+    v: &mut Closest,
+    t0: f32,
+    t1: f32,
+    paths: &Paths,
+    cur: &mut Cursor,
+    steps: &mut Steps,
+    locate: impl FnOnce(&PreparedRay, Vec3, &mut Steps) -> Option<u32>,
+) -> bool {
+    let r = v.ray;
+    let p = r.at(t0);
+    let first = match guess_first(tree, paths, cur, p, r.dir, steps) {
+        Some(leaf) => leaf,
+        None => match locate(&r, p, steps) {
+            Some(leaf) => leaf,
+            None => return false,
+        },
+    };
+    walk(tree, v, first, t1, paths, cur, steps) != RopeEnd::Fallback
+}
+
+/// The end of every shaft ray's trace: one whose walk could not finish
+/// (`done` false: a ray in a split plane it crosses) is redone by
+/// hierarchical traversal; the counts go to `stats`.
+pub(crate) fn finish(
+    tree: &KdTree,
+    v: &mut Closest,
+    done: bool,
+    stack: &mut TraversalStack,
+    mut steps: Steps,
+    stats: &mut TraceStats,
+) -> Hit {
+    if !done {
+        v.best = Hit::MISS;
+        tree.walk_hierarchical_on(v, &mut NoRecord, stack, &mut steps);
+    }
+    steps.flush(stats);
+    stats.prim_tests += v.tests;
+    v.best
 }
 
 /// Visits a shaft's common leaves (`(node, run)` in order; a run of empty

@@ -20,8 +20,8 @@
 
 use super::guide::{self, Cursor, Paths, FROM_START, MAX_GUIDES};
 use super::history::{fill_lengths, History, HistoryRecord, KIND_LEAF};
-use crate::geom::Aabb;
-use crate::kd::traverse::{new_stack, Closest, NoRecord, RopeEnd, Steps, TraversalStack};
+use crate::geom::{Aabb, PreparedRay};
+use crate::kd::traverse::{new_stack, Closest, NoRecord, Steps, TraversalStack};
 use crate::kd::{KdNode, KdTree};
 use crate::{Hit, Ray, TraceStats, Vec3};
 
@@ -526,63 +526,33 @@ pub(crate) fn trace_guided_on(
     let Some((t0, t1)) = tree.scene_segment(&v.ray) else {
         return Hit::MISS;
     };
-    if !terminated(tree, h, &mut v, &mut steps) {
+    let done = terminated(tree, h, &mut v, &mut steps) || {
         let mut cur = Cursor::new(paths, nearest);
-        let done = match h.leading_leaves {
-            0 => from_first_entry(tree, h, paths, &mut cur, &mut v, t0, t1, &mut steps),
+        match h.leading_leaves {
+            // No leading leaf: the first leaf from the cut's first entry, an
+            // interior node every ray of the shaft enters first.
+            0 => {
+                let from_entry = |r: &PreparedRay, _: Vec3, steps: &mut Steps| {
+                    let e = h.as_slice().first()?;
+                    let bx = Aabb {
+                        min: Vec3::from(e.min),
+                        max: Vec3::from(e.max),
+                    };
+                    let (te, _) = bx.clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max)?;
+                    tree.locate(e.node, r.at(te), r.dir, steps)
+                        .map(|nd| nd.index())
+                };
+                guide::walk_from_first(
+                    tree, &mut v, t0, t1, paths, &mut cur, &mut steps, from_entry,
+                )
+            }
             k => {
                 let leaves = h.entries[..k]
                     .iter()
                     .map(|e| (e.node, e.flags & ENTRY_EMPTY_RUN != 0));
                 guide::walk_common(tree, leaves, &mut v, t1, paths, &mut cur, &mut steps)
             }
-        };
-        if !done {
-            v.best = Hit::MISS;
-            tree.walk_hierarchical_on(&mut v, &mut NoRecord, stack, &mut steps);
-        }
-    }
-    steps.flush(stats);
-    stats.prim_tests += v.tests;
-    v.best
-}
-
-/// No leading leaf: the ray's first leaf is one a boundary ray entered
-/// first, or else is located from the cut's first entry (an interior node
-/// every ray of the shaft enters first); then guided ropes to `t1`. False
-/// when the ray must be redone hierarchically.
-#[allow(clippy::too_many_arguments)]
-fn from_first_entry(
-    tree: &KdTree,
-    h: &Hlcts,
-    paths: &Paths,
-    cur: &mut Cursor,
-    v: &mut Closest,
-    t0: f32,
-    t1: f32,
-    steps: &mut Steps,
-) -> bool {
-    let r = v.ray;
-    let p = r.at(t0);
-    let first = match guide::guess_first(tree, paths, cur, p, r.dir, steps) {
-        Some(leaf) => leaf,
-        None => {
-            let Some(e) = h.as_slice().first() else {
-                return false;
-            };
-            let bx = Aabb {
-                min: Vec3::from(e.min),
-                max: Vec3::from(e.max),
-            };
-            let Some((te, _)) = bx.clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max) else {
-                return false;
-            };
-            match tree.locate(e.node, r.at(te), r.dir, steps) {
-                Some(nd) => nd.index(),
-                None => return false,
-            }
         }
     };
-    guide::walk(tree, v, first, t1, paths, cur, steps) != RopeEnd::Fallback
+    guide::finish(tree, &mut v, done, stack, steps, stats)
 }
-

@@ -13,7 +13,7 @@
 
 use super::guide::{self, Cursor, Paths, FROM_START, MAX_GUIDES};
 use super::history::{HistoryRecord, KIND_LEAF};
-use crate::kd::traverse::{new_stack, Closest, NoRecord, RopeEnd, Steps, TraversalStack};
+use crate::kd::traverse::{new_stack, Closest, Steps, TraversalStack};
 use crate::kd::KdTree;
 use crate::{Hit, Ray, TraceStats, Vec3};
 
@@ -286,8 +286,18 @@ pub(crate) fn trace_on(
     let mut cur = Cursor::new(paths, nearest);
     let done = match tree.scene_segment(&v.ray) {
         None => true,
+        // No common leaf: the first leaf from the shaft's entry node (one
+        // step for the test that the entry point lies strictly inside it).
         Some((t0, t1)) if s.len == 0 => {
-            walk_from_entry(tree, s, paths, &mut cur, &mut v, t0, t1, &mut steps)
+            let from_entry = |r: &crate::geom::PreparedRay, p: Vec3, steps: &mut Steps| {
+                let e = s.entry?;
+                steps.interior += 1;
+                e.holds(p).then_some(())?;
+                tree.locate(e.node, p, r.dir, steps).map(|nd| nd.index())
+            };
+            guide::walk_from_first(
+                tree, &mut v, t0, t1, paths, &mut cur, &mut steps, from_entry,
+            )
         }
         Some((_, t1)) => {
             let seq = s.entries[..s.len]
@@ -296,47 +306,5 @@ pub(crate) fn trace_on(
             guide::walk_common(tree, seq, &mut v, t1, paths, &mut cur, &mut steps)
         }
     };
-    if !done {
-        v.best = Hit::MISS;
-        tree.walk_hierarchical_on(&mut v, &mut NoRecord, stack, &mut steps);
-    }
-    steps.flush(stats);
-    stats.prim_tests += v.tests;
-    v.best
-}
-
-/// No common leaf: the ray's first leaf is one the boundary rays entered
-/// first, or else found from the shaft's entry node (one step for the test
-/// that its entry point lies there); then it goes on by ropes. False when
-/// it must be redone hierarchically.
-#[allow(clippy::too_many_arguments)]
-fn walk_from_entry(
-    tree: &KdTree,
-    s: &Slcts,
-    paths: &Paths,
-    cur: &mut Cursor,
-    v: &mut Closest,
-    t0: f32,
-    t1: f32,
-    steps: &mut Steps,
-) -> bool {
-    let r = v.ray;
-    let p = r.at(t0);
-    let first = match guide::guess_first(tree, paths, cur, p, r.dir, steps) {
-        Some(leaf) => leaf,
-        None => {
-            let Some(e) = s.entry else {
-                return false;
-            };
-            steps.interior += 1;
-            if !e.holds(p) {
-                return false;
-            }
-            match tree.locate(e.node, p, r.dir, steps) {
-                Some(nd) => nd.index(),
-                None => return false,
-            }
-        }
-    };
-    guide::walk(tree, v, first, t1, paths, cur, steps) != RopeEnd::Fallback
+    guide::finish(tree, &mut v, done, stack, steps, stats)
 }
