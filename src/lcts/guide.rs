@@ -107,43 +107,38 @@ impl<'b> Paths<'b> {
 }
 
 /// One ray's place on the paths: the slot of the leaf it would meet next on
-/// the path it follows (past every path once it has lost them), and
-/// the order in which paths are searched when it leaves the one it follows.
+/// the path it follows (past every path once it has lost them), and the
+/// path it started on, searched first when it leaves the one it follows
+/// (the others in index order). Three words: made for every ray.
 #[derive(Clone, Copy, Debug)]
 pub struct Cursor {
     next: u32,
-    order: [u8; MAX_GUIDES],
+    first: u8,
     count: u8,
 }
 
 impl Cursor {
     /// A ray at the start of path `nearest` (the boundary ray closest to
-    /// it); the others are searched in index order.
+    /// it).
     #[inline]
     pub fn new(paths: &Paths, nearest: usize) -> Cursor {
-        let count = paths.count;
-        if count == 0 {
-            return Cursor {
-                next: 0,
-                order: [0; MAX_GUIDES],
-                count: 0,
-            };
-        }
-        let first = nearest.min(count - 1);
-        let mut order = [0u8; MAX_GUIDES];
-        order[0] = first as u8;
-        let mut k = 1;
-        for j in 0..count {
-            if j != first {
-                order[k] = j as u8;
-                k += 1;
-            }
-        }
+        let first = nearest.min(paths.count.max(1) - 1);
         Cursor {
             next: (first * paths.cap) as u32,
-            order,
-            count: count as u8,
+            first: first as u8,
+            count: paths.count as u8,
         }
+    }
+
+    /// The paths in search order: the first one, then the others.
+    #[inline]
+    fn order(&self) -> impl Iterator<Item = usize> {
+        let (first, count) = (self.first as usize, self.count as usize);
+        (0..count).map(move |i| match i {
+            0 => first,
+            i if i <= first => i - 1,
+            i => i,
+        })
     }
 
     /// The leaf the followed path enters next, if it holds `p` (a wrong
@@ -168,8 +163,8 @@ impl Cursor {
         }
         // The other paths through `from`: where they went next.
         let mut tried = leaf;
-        for &j in &self.order[..self.count as usize] {
-            let (lo, hi) = (j as usize * paths.cap, paths.ends[j as usize] as usize);
+        for j in self.order() {
+            let (lo, hi) = (j * paths.cap, paths.ends[j] as usize);
             let Some(i) = paths.slots[lo..hi].iter().position(|&l| l == from) else {
                 continue;
             };
@@ -201,8 +196,8 @@ impl Cursor {
     /// The ray entered `leaf`, found by its rope: follow the first path (in
     /// search order) that entered it too, from there on; none: stop guessing.
     fn resync(&mut self, paths: &Paths, leaf: u32) {
-        for &j in &self.order[..self.count as usize] {
-            let (from, to) = (j as usize * paths.cap, paths.ends[j as usize] as usize);
+        for j in self.order() {
+            let (from, to) = (j * paths.cap, paths.ends[j] as usize);
             if let Some(i) = paths.slots[from..to].iter().position(|&l| l == leaf) {
                 self.next = (from + i + 1) as u32;
                 return;
@@ -244,8 +239,8 @@ fn guess_first(
     // Every path's first leaf, nearest first: the ray's first leaf is
     // where its descent parts from theirs, so often one of them.
     let mut tried = [END; MAX_GUIDES];
-    for (k, &j) in cur.order[..cur.count as usize].iter().enumerate() {
-        let from = j as usize * paths.cap;
+    for (k, j) in cur.order().enumerate() {
+        let from = j * paths.cap;
         let leaf = paths.slots[from];
         if leaf == END || tried[..k].contains(&leaf) {
             continue;
