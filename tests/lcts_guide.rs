@@ -196,3 +196,32 @@ fn a_leaf_holds_a_point_where_point_location_puts_it() {
     }
     assert!(on_faces > 1500 && in_plane > 100, "{on_faces} {in_plane}");
 }
+
+/// A boundary ray that ended before the common part's end (an HLCTS cut
+/// entry it never reached) has no path: it guides nothing, rather than
+/// guiding from its own first leaf.
+#[test]
+fn a_boundary_ray_that_ended_early_guides_nothing() {
+    use coray::lcts::guide::NO_PATH;
+    let mut rng = Rng(0x1234_5678);
+    let o = random_scene(&mut rng, 2000, 200, 0, 10.0);
+    let scene = o.scene();
+    let params = KdParams::paper();
+    let (req, mut b) = ideal_storage(&scene, &params);
+    let tree = build_with(&scene, &params, &req, &mut b);
+    let mut guided_somewhere = 0;
+    for ray in random_rays(&mut rng, 500, 10.0) {
+        let (rec, hit, hier) = history(&tree, &ray);
+        let mut buf = vec![0u32; 4096];
+        let hs = [Some(rec.as_slice())];
+        let none = Paths::build(&hs, &[NO_PATH], &mut buf);
+        let mut st = TraceStats::default();
+        let g = slcts::trace(&tree, &no_sequence(), &none, 0, &ray, &mut st);
+        assert!(same(&g, &hit));
+        // Unguided and without an entry node: redone hierarchically.
+        assert_eq!(st.traversal_steps, hier.traversal_steps, "{ray:?}");
+        let (_, own) = guided(&tree, &ray, &[&rec]);
+        guided_somewhere += (own.traversal_steps < hier.traversal_steps) as usize;
+    }
+    assert!(guided_somewhere > 300, "{guided_somewhere}");
+}

@@ -28,8 +28,11 @@ pub const MAX_GUIDES: usize = super::hlcts::MAX_RAYS;
 /// cursor there never matches and the ray has left that path.
 const END: u32 = u32::MAX;
 
-/// Start the paths at a history's first record.
-pub const FROM_START: u32 = u32::MAX;
+/// Start a path at its history's first record.
+pub const FROM_START: u32 = u32::MAX - 1;
+/// No path: the boundary ray never reached the end of the common part (it
+/// ended before).
+pub const NO_PATH: u32 = u32::MAX;
 
 /// The leaves (leaf record indices) each boundary ray crossed past the
 /// shaft's common part, in order, in a caller buffer: path `j` in slots
@@ -56,8 +59,9 @@ impl Paths<'static> {
 }
 
 impl<'b> Paths<'b> {
-    /// The leaves after record `after[j]` (or from the start, for
-    /// [`FROM_START`]) of each history, up to [`MAX_GUIDES`] of them, into
+    /// The leaves after record `after[j]` (from the start for
+    /// [`FROM_START`], none for [`NO_PATH`]) of each history, up to
+    /// [`MAX_GUIDES`] of them, into
     /// `buf` (an equal share each; a path that does not fit is cut short,
     /// which only makes guesses run out sooner). A history that overflowed
     /// gives an empty path.
@@ -76,7 +80,7 @@ impl<'b> Paths<'b> {
             let out = &mut buf[j * cap..(j + 1) * cap];
             let room = cap - 2;
             let mut n = 0;
-            if let Some(h) = histories[j] {
+            if let Some(h) = histories[j].filter(|_| after[j] != NO_PATH) {
                 let start = if after[j] == FROM_START {
                     0
                 } else {

@@ -18,7 +18,7 @@
 //! Walking the cut's interior entries one by one costs more steps than the
 //! guided ropes (at 1024^2, HLCTS-2D alpha 0.33-0.56 before, 0.24-0.33 after).
 
-use super::guide::{self, Cursor, Paths, FROM_START, MAX_GUIDES};
+use super::guide::{self, Cursor, Paths, FROM_START, MAX_GUIDES, NO_PATH};
 use super::history::{fill_lengths, History, HistoryRecord, KIND_LEAF};
 use crate::geom::{Aabb, PreparedRay};
 use crate::kd::traverse::{new_stack, Closest, NoRecord, Steps, TraversalStack};
@@ -78,7 +78,10 @@ impl Hlcts<'_> {
     ) -> Paths<'p> {
         let after: [u32; MAX_GUIDES] = core::array::from_fn(|j| match self.leading_leaves {
             0 => FROM_START,
-            k => self.entries[k - 1].ptr[j],
+            k => match self.entries[k - 1].ptr[j] {
+                NONE => NO_PATH,
+                at => at,
+            },
         });
         Paths::build(histories, &after, buf)
     }
