@@ -468,17 +468,15 @@ impl<'a> KdTree<'a> {
         let mut t_exit = f32::INFINITY;
         let mut face = 0;
         for a in 0..3 {
-            let (bound, f) = if r.dir[a] > 0.0 {
-                (rp.max[a], 2 * a + 1)
-            } else if r.dir[a] < 0.0 {
-                (rp.min[a], 2 * a)
-            } else {
-                continue;
-            };
+            // Selects, not branches: the ray's signs are the same at every leaf.
+            let up = r.dir[a] > 0.0;
+            let bound = if up { rp.max[a] } else { rp.min[a] };
             let t = (bound - r.origin[a]) * r.inv_dir[a];
+            // A ray parallel to the axis never leaves through its faces.
+            let t = if r.dir[a] == 0.0 { f32::INFINITY } else { t };
             if t < t_exit {
                 t_exit = t;
-                face = f;
+                face = 2 * a + up as usize;
             }
         }
         (t_exit, face)
