@@ -444,6 +444,8 @@ impl<'a> KdTree<'a> {
         d: Vec3,
         steps: &mut Steps,
     ) -> Option<KdNode> {
+        // Arrays, not `Vec3`s: they take the node's axis without a branch per lane.
+        let (p, d) = (p.to_array(), d.to_array());
         loop {
             let nd = self.nodes[node as usize];
             if nd.is_leaf() {
@@ -499,12 +501,7 @@ impl<'a> KdTree<'a> {
         if next == NO_NODE {
             return Ok(None);
         }
-        let mut p = r.at(t_exit);
-        p[face / 2] = if face % 2 == 1 {
-            rp.max[face / 2]
-        } else {
-            rp.min[face / 2]
-        };
+        let p = rp.onto_face(face, r.at(t_exit));
         self.locate(next, p, r.dir, steps).map(Some).ok_or(())
     }
 

@@ -417,9 +417,7 @@ pub(crate) fn next(
         cur.follow(paths, target.index());
         return Ok(Some(target.index()));
     }
-    let a = face / 2;
-    let mut p = r.at(t_exit);
-    p[a] = if face % 2 == 1 { rp.max[a] } else { rp.min[a] };
+    let p = rp.onto_face(face, r.at(t_exit));
     if let Some(n) = cur.guess(tree, paths, leaf, p, r.dir, steps) {
         return Ok(Some(n));
     }
