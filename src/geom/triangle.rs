@@ -13,9 +13,11 @@ pub fn intersect_triangle(
     v2: Vec3,
     t_max: f32,
 ) -> Option<(f32, f32, f32)> {
-    let a = v0 - r.origin;
-    let b = v1 - r.origin;
-    let c = v2 - r.origin;
+    // Arrays, not `Vec3`s: they take the ray's run-time axes without a
+    // branch per lane.
+    let a = (v0 - r.origin).to_array();
+    let b = (v1 - r.origin).to_array();
+    let c = (v2 - r.origin).to_array();
     let (kx, ky, kz) = (r.kx, r.ky, r.kz);
     let ax = a[kx] - r.sx * a[kz];
     let ay = a[ky] - r.sy * a[kz];
