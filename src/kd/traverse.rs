@@ -444,8 +444,6 @@ impl<'a> KdTree<'a> {
         d: Vec3,
         steps: &mut Steps,
     ) -> Option<KdNode> {
-        // Arrays, not `Vec3`s: they take the node's axis without a branch per lane.
-        let (p, d) = (p.to_array(), d.to_array());
         loop {
             let nd = self.nodes[node as usize];
             if nd.is_leaf() {
