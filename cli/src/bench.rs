@@ -384,9 +384,9 @@ pub fn bench(
 ) -> Result<Vec<Row>, String> {
     let projection = crate::projbuild::methods();
     for m in methods {
-        if !all_methods().contains(&m.as_str()) && !projection.contains(m) {
+        if !all_methods().contains(&m.as_str()) && !projection.contains(m) && !is_lcts(m) {
             return Err(format!(
-                "unknown method `{m}` (have: {}, and proj-BUILDER-CRITERIA-SCHEME: {})",
+                "unknown method `{m}` (have: {}, slcts1d:N, slcts2d:NxM, and proj-BUILDER-CRITERIA-SCHEME: {})",
                 all_methods().join(", "),
                 projection.join(", ")
             ));
@@ -420,9 +420,7 @@ pub fn bench(
                 hits: reference.hits.clone(),
                 shadowed: reference.shadowed.clone(),
             },
-            "slcts1d" | "slcts2d" | "hlcts1d" | "hlcts2d" => {
-                run_lcts(s, params, lcts_scheme(m).unwrap(), m, repeat)?
-            }
+            l if is_lcts(l) => run_lcts(s, params, lcts_scheme(l).unwrap(), l, repeat)?,
             "kd-rope" => run_kd(
                 s,
                 params,
@@ -471,8 +469,20 @@ fn total_mismatches(traced: &Traced, reference: &Traced, embree: bool, primary: 
 }
 
 /// The image-casting scheme of a method name: the four LCTS schemes
-/// (paper windows), and `kd` / `kd-rope` as hierarchical and rope casts.
+/// (paper windows, or `slcts1d:N` and `slcts2d:NxM` for others), and `kd` /
+/// `kd-rope` as hierarchical and rope casts.
 pub fn lcts_scheme(method: &str) -> Option<Scheme> {
+    let size = |s: &str| s.parse::<u32>().ok();
+    if let Some(n) = method.strip_prefix("slcts1d:") {
+        return Some(Scheme::Slcts1d { n: size(n)? });
+    }
+    if let Some(nm) = method.strip_prefix("slcts2d:") {
+        let (n, m) = nm.split_once('x')?;
+        return Some(Scheme::Slcts2d {
+            n: size(n)?,
+            m: size(m)?,
+        });
+    }
     Some(match method {
         "kd" => Scheme::Hierarchical,
         "kd-rope" => Scheme::Ropes,
@@ -482,6 +492,11 @@ pub fn lcts_scheme(method: &str) -> Option<Scheme> {
         "hlcts2d" => Scheme::Hlcts2d,
         _ => return None,
     })
+}
+
+/// Whether `method` casts an image by an LCTS scheme.
+fn is_lcts(method: &str) -> bool {
+    lcts_scheme(method).is_some_and(|s| !matches!(s, Scheme::Hierarchical | Scheme::Ropes))
 }
 
 /// An LCTS image-casting scheme on the camera's primary rays. Its
@@ -845,6 +860,29 @@ mod tests {
         };
         assert_eq!(ratios(&rtree, &rows), (Some(0.5), Some(1.5)));
         assert_eq!(ratios(&kd, &rows), (Some(1.0), Some(1.0)));
+    }
+
+    /// Window sizes other than the paper's are methods too; a malformed or
+    /// non-LCTS name is none.
+    #[test]
+    fn lcts_window_sizes_are_method_names() {
+        assert_eq!(
+            lcts_scheme("slcts2d:7x3"),
+            Some(Scheme::Slcts2d { n: 7, m: 3 })
+        );
+        assert_eq!(lcts_scheme("slcts1d:9"), Some(Scheme::Slcts1d { n: 9 }));
+        assert_eq!(lcts_scheme("slcts2d"), Some(Scheme::Slcts2d { n: 5, m: 5 }));
+        for bad in [
+            "slcts2d:7",
+            "slcts2d:7x",
+            "slcts1d:",
+            "slcts1d:-2",
+            "hlcts2d:4x4",
+        ] {
+            assert_eq!(lcts_scheme(bad), None, "{bad}");
+        }
+        assert!(is_lcts("slcts2d:9x9") && is_lcts("hlcts1d"));
+        assert!(!is_lcts("kd") && !is_lcts("kd-rope") && !is_lcts("rtree"));
     }
 
     /// A method's own count (LCTS pixels, which come without per-ray hits)

@@ -70,7 +70,8 @@ enum Command {
         /// Resolution N (N x N primary rays).
         #[arg(long, default_value_t = 1024)]
         res: u32,
-        /// Comma-separated methods (default: every method of this build).
+        /// Comma-separated methods (default: every method of this build);
+        /// `slcts1d:N` and `slcts2d:NxM` cast with other windows than the paper's.
         #[arg(long, value_delimiter = ',')]
         methods: Option<Vec<String>>,
         /// kd-tree preset: `auto` (SAH termination) or `paper` (depth 16, 2 per leaf).
