@@ -100,7 +100,11 @@ impl KdRopes {
     pub fn onto_face(&self, face: usize, p: Vec3) -> Vec3 {
         let a = face / 2;
         let mut q = p.to_array();
-        q[a] = if face % 2 == 1 { self.max[a] } else { self.min[a] };
+        q[a] = if face % 2 == 1 {
+            self.max[a]
+        } else {
+            self.min[a]
+        };
         Vec3::from(q)
     }
 
