@@ -94,10 +94,10 @@ pub struct KdRopes {
 impl KdRopes {
     /// `p`, where a ray leaves the leaf through face `face`, put on that
     /// face exactly: located beyond the face, it cannot round back into
-    /// this leaf. (An array takes the run-time axis without a branch per
-    /// lane, as a `Vec3` would.)
+    /// this leaf. (An array, unlike a glam `Vec3`, takes the run-time axis
+    /// without a branch per lane.)
     #[inline]
-    pub fn onto_face(&self, face: usize, p: Vec3) -> Vec3 {
+    pub(crate) fn onto_face(&self, face: usize, p: Vec3) -> Vec3 {
         let a = face / 2;
         let mut q = p.to_array();
         q[a] = if face % 2 == 1 {
