@@ -513,6 +513,24 @@ impl<'a> KdTree<'a> {
         steps: &mut Steps,
     ) -> RopeEnd {
         let r = *v.ray();
+        self.rope_walk_by(v, first, t1, steps, |nd, t_exit, face, steps| {
+            self.rope_next(&r, nd, t_exit, face, steps)
+        })
+    }
+
+    /// [`KdTree::rope_walk`] with its step across a face given: `next(leaf,
+    /// t_exit, face, steps)` is the leaf beyond, as [`KdTree::rope_next`]
+    /// answers (guided ropes guess it first).
+    #[inline]
+    pub(crate) fn rope_walk_by<V: LeafVisitor>(
+        &self,
+        v: &mut V,
+        first: KdNode,
+        t1: f32,
+        steps: &mut Steps,
+        mut next: impl FnMut(KdNode, f32, usize, &mut Steps) -> Result<Option<KdNode>, ()>,
+    ) -> RopeEnd {
+        let r = *v.ray();
         let mut nd = first;
         // A rope walk crosses each leaf at most once; the bound only guards
         // against a corrupt arena.
@@ -527,8 +545,8 @@ impl<'a> KdTree<'a> {
             if t_exit > t1 {
                 return RopeEnd::Exited;
             }
-            match self.rope_next(&r, nd, t_exit, face, steps) {
-                Ok(Some(next)) => nd = next,
+            match next(nd, t_exit, face, steps) {
+                Ok(Some(n)) => nd = n,
                 Ok(None) => return RopeEnd::Exited,
                 Err(()) => return RopeEnd::Fallback,
             }

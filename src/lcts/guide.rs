@@ -366,28 +366,15 @@ pub(crate) fn walk(
     steps: &mut Steps,
 ) -> RopeEnd {
     let r = v.ray;
-    let mut leaf = first;
-    // A rope walk crosses each leaf at most once; the bound only guards
-    // against a corrupt arena.
-    for _ in 0..=tree.leaves.len() {
-        let nd = KdNode::leaf(leaf);
-        steps.leaves += 1;
-        let refs = tree.leaf_refs(nd);
-        steps.empty += refs.is_empty() as u64;
-        let (t_exit, face) = tree.leaf_exit(&r, nd);
-        if v.visit(&tree.scene, refs, t_exit.min(t1)) {
-            return RopeEnd::Stopped;
-        }
-        if t_exit > t1 {
-            return RopeEnd::Exited;
-        }
-        match next(tree, &r, leaf, t_exit, face, paths, cur, steps) {
-            Ok(Some(n)) => leaf = n,
-            Ok(None) => return RopeEnd::Exited,
-            Err(()) => return RopeEnd::Fallback,
-        }
-    }
-    RopeEnd::Fallback
+    tree.rope_walk_by(
+        v,
+        KdNode::leaf(first),
+        t1,
+        steps,
+        |nd, t_exit, face, steps| {
+            next(tree, &r, nd.index(), t_exit, face, paths, cur, steps).map(|n| n.map(KdNode::leaf))
+        },
+    )
 }
 
 /// The leaf beyond face `face` of leaf `leaf` where the ray goes on after

@@ -183,6 +183,13 @@ const LEAF_PIXELS: u32 = 64;
 /// alpha 0.360 / 0.352 / 0.412, eta 2.57 / 1.90 / 1.51).
 const LEAF_PIXELS_1D: u32 = 16;
 
+/// 1 when pixel `x` of `x0..=x1` lies nearer `x1` than `x0`, else 0: which
+/// end's boundary ray guides it.
+#[inline]
+fn far_half(x: u32, x0: u32, x1: u32) -> usize {
+    (2 * (x - x0) > x1 - x0) as usize
+}
+
 /// History slots of a bisection `levels` deep: the four first corners, and
 /// up to four rays traced per level (2D: two on each half's new edge).
 fn bisection_slots(levels: usize) -> usize {
@@ -358,7 +365,7 @@ pub fn cast_image(
                         let paths = seq.paths(&hs, &mut *path_buf);
                         let (x0, x1) = (corners(w, n, i), corners(w, n, i + 1));
                         for x in x0 + 1..x1 {
-                            let nearest = (2 * (x - x0) > x1 - x0) as usize;
+                            let nearest = far_half(x, x0, x1);
                             let hit = slcts::trace_on(
                                 tree,
                                 &seq,
@@ -401,8 +408,7 @@ pub fn cast_image(
                                     continue;
                                 }
                                 // Corners 0 and 1 on the top row, 2 and 3 below.
-                                let nearest = (2 * (x - x0) > x1 - x0) as usize
-                                    + 2 * (2 * (y - y_prev) > yj - y_prev) as usize;
+                                let nearest = far_half(x, x0, x1) + 2 * far_half(y, y_prev, yj);
                                 let hit = slcts::trace_on(
                                     tree,
                                     &seq,
@@ -595,7 +601,7 @@ impl<F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, F> {
                 let buf = core::mem::take(&mut self.paths);
                 let paths = cut.paths(&hs, &mut *buf);
                 for x in x0 + 1..x1 {
-                    let nearest = (2 * (x - x0) > x1 - x0) as usize;
+                    let nearest = far_half(x, x0, x1);
                     let hit = hlcts::trace_guided_on(
                         self.tree,
                         &cut,
@@ -637,8 +643,7 @@ impl<F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, F> {
                 for x in x0..=x1 {
                     if !corner(x, y) {
                         // Corners 0 and 1 on the top row, 2 and 3 below.
-                        let nearest = (2 * (x - x0) > x1 - x0) as usize
-                            + 2 * (2 * (y - y0) > y1 - y0) as usize;
+                        let nearest = far_half(x, x0, x1) + 2 * far_half(y, y0, y1);
                         let hit = hlcts::trace_guided_on(
                             self.tree,
                             &cut,

@@ -13,6 +13,7 @@
 
 use super::guide::{self, Cursor, Paths, FROM_START, MAX_GUIDES};
 use super::history::{HistoryRecord, KIND_LEAF};
+use crate::geom::PreparedRay;
 use crate::kd::traverse::{new_stack, Closest, Steps, TraversalStack};
 use crate::kd::KdTree;
 use crate::{Hit, Ray, TraceStats, Vec3};
@@ -289,7 +290,7 @@ pub(crate) fn trace_on(
         // No common leaf: the first leaf from the shaft's entry node (one
         // step for the test that the entry point lies strictly inside it).
         Some((t0, t1)) if s.len == 0 => {
-            let from_entry = |r: &crate::geom::PreparedRay, p: Vec3, steps: &mut Steps| {
+            let from_entry = |r: &PreparedRay, p: Vec3, steps: &mut Steps| {
                 let e = s.entry?;
                 steps.interior += 1;
                 e.holds(p).then_some(())?;
