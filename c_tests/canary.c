@@ -1,6 +1,7 @@
 /* No byte outside the given arenas and output arrays is written: each sits
- * between guard zones of a known pattern, which must survive build and trace.
- * Inside the tree arena, nothing past the layout's used bytes is written either. */
+ * between guard zones of a known pattern, which must survive build and
+ * trace. Inside the tree arena, nothing past the layout's used bytes is
+ * written either, and a failing build writes nothing at all. */
 #include "common.h"
 
 #define GUARD 4096
@@ -32,41 +33,49 @@ int main(void) {
     rays = malloc(sizeof(CorayRay) * nr);
     rays_random(rays, nr, 1.0f);
     for (preset = 0; preset < 2; preset++) {
-        CorayKdParams p = coray_kd_params_default(preset);
-        CorayKdRequirements req;
+        CorayKdParams p = coray_kdtree_params_default(preset);
+        CorayRequirements req = requirements0();
         CorayKdTreeInfo info;
+        CorayKdTree tree;
         size_t sizes[3];
+        memset(&info, 0, sizeof info);
+        info.struct_size = sizeof info;
         CHECK_STATUS(coray_kdtree_requirements(n, &p, &req), CORAY_STATUS_OK);
-        sizes[0] = req.tree_bytes;
-        sizes[1] = (req.tree_min_bytes + req.tree_bytes) / 2 + 3;
-        sizes[2] = req.tree_min_bytes;
+        sizes[0] = req.arena_bytes;
+        sizes[1] = (req.arena_min_bytes + req.arena_bytes) / 2 + 3;
+        sizes[2] = req.arena_min_bytes;
         for (k = 0; k < 3; k++) {
-            unsigned char *tree = guarded(sizes[k]);
+            unsigned char *arena = guarded(sizes[k]);
             unsigned char *scratch = guarded(req.scratch_bytes);
             unsigned char *hits = guarded(sizeof(CorayHit) * nr);
             unsigned char *occ = guarded(nr);
             unsigned char *stats = guarded(sizeof(CorayTraceStats));
-            CHECK_STATUS(coray_kdtree_build(&ts.view, &p, tree, sizes[k], scratch, req.scratch_bytes, NULL), CORAY_STATUS_OK);
-            CHECK_STATUS(coray_kdtree_info(tree, sizes[k], &info), CORAY_STATUS_OK);
+            unsigned char *stack = guarded(CORAY_KDTREE_STACK_BYTES);
+            ((CorayTraceStats *)stats)->struct_size = sizeof(CorayTraceStats);
+            CHECK_STATUS(coray_kdtree_build(&ts.view, &p, arena, sizes[k], scratch, req.scratch_bytes, NULL), CORAY_STATUS_OK);
+            CHECK_STATUS(coray_kdtree_open(arena, sizes[k], &ts.view, &tree), CORAY_STATUS_OK);
+            CHECK_STATUS(coray_kdtree_info(&tree, &info), CORAY_STATUS_OK);
             CHECK(info.arena_bytes_used <= sizes[k]);
-            CHECK(intact(tree, info.arena_bytes_used, sizes[k]));
-            CHECK_STATUS(coray_kdtree_intersect(tree, sizes[k], &ts.view, 0, rays, (CorayHit *)hits, nr, (CorayTraceStats *)stats), CORAY_STATUS_OK);
-            CHECK_STATUS(coray_kdtree_intersect(tree, sizes[k], &ts.view, 1, rays, (CorayHit *)hits, nr, (CorayTraceStats *)stats), CORAY_STATUS_OK);
-            CHECK_STATUS(coray_kdtree_occluded(tree, sizes[k], &ts.view, 1, rays, occ, nr, (CorayTraceStats *)stats), CORAY_STATUS_OK);
-            CHECK(guards_intact(tree, sizes[k]));
+            CHECK(intact(arena, info.arena_bytes_used, sizes[k]));
+            CHECK_STATUS(coray_kdtree_intersect(&tree, 0, rays, (CorayHit *)hits, nr, stack, CORAY_KDTREE_STACK_BYTES, (CorayTraceStats *)stats), CORAY_STATUS_OK);
+            CHECK_STATUS(coray_kdtree_intersect(&tree, 1, rays, (CorayHit *)hits, nr, stack, CORAY_KDTREE_STACK_BYTES, (CorayTraceStats *)stats), CORAY_STATUS_OK);
+            CHECK_STATUS(coray_kdtree_occluded(&tree, 1, rays, occ, nr, stack, CORAY_KDTREE_STACK_BYTES, (CorayTraceStats *)stats), CORAY_STATUS_OK);
+            CHECK(guards_intact(arena, sizes[k]));
             CHECK(guards_intact(scratch, req.scratch_bytes));
             CHECK(guards_intact(hits, sizeof(CorayHit) * nr));
             CHECK(guards_intact(occ, nr));
             CHECK(guards_intact(stats, sizeof(CorayTraceStats)));
+            CHECK(guards_intact(stack, CORAY_KDTREE_STACK_BYTES));
             /* A failing build writes nothing at all. */
-            memset(tree, PATTERN, sizes[k]);
-            CHECK_STATUS(coray_kdtree_build(&ts.view, &p, tree, req.tree_min_bytes - 1, scratch, req.scratch_bytes, NULL), CORAY_STATUS_ARENA_TOO_SMALL);
-            CHECK(intact(tree, 0, sizes[k]));
-            free(tree - GUARD);
+            memset(arena, PATTERN, sizes[k]);
+            CHECK_STATUS(coray_kdtree_build(&ts.view, &p, arena, req.arena_min_bytes - 1, scratch, req.scratch_bytes, NULL), CORAY_STATUS_ARENA_TOO_SMALL);
+            CHECK(intact(arena, 0, sizes[k]));
+            free(arena - GUARD);
             free(scratch - GUARD);
             free(hits - GUARD);
             free(occ - GUARD);
             free(stats - GUARD);
+            free(stack - GUARD);
         }
     }
     free(rays);

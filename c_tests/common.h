@@ -203,24 +203,36 @@ static inline void *arena_alloc(size_t bytes) {
     return p;
 }
 
-/* A built tree with its ideal arenas (scratch freed). */
+/* Output structs with their struct_size set. */
+static inline CorayRequirements requirements0(void) { return coray_requirements_default(); }
+static inline CorayTraceStats stats0(void) { return coray_trace_stats_default(); }
+static inline CorayShape shape0(void) { return coray_shape_default(); }
+
+/* A kd traversal stack: one per thread. */
+typedef struct {
+    _Alignas(16) unsigned char bytes[CORAY_KDTREE_STACK_BYTES];
+} KdStack;
+
+/* A built and opened tree with its ideal arena (scratch freed). */
 typedef struct {
     void *arena;
     size_t bytes;
+    CorayKdTree tree;
 } Tree;
 
-static inline Tree tree_build(const CorayScene *scene, uint32_t preset) {
-    CorayKdParams p = coray_kd_params_default(preset);
-    CorayKdRequirements req;
+static inline Tree tree_build(const CorayScene *scene, CorayKdPreset preset) {
+    CorayKdParams p = coray_kdtree_params_default(preset);
+    CorayRequirements req = requirements0();
     Tree t;
     void *scratch;
     size_t n = scene->triangle_count + scene->sphere_count + scene->cone_count;
     CHECK_STATUS(coray_kdtree_requirements(n, &p, &req), CORAY_STATUS_OK);
-    t.bytes = req.tree_bytes;
-    t.arena = arena_alloc(req.tree_bytes);
+    t.bytes = req.arena_bytes;
+    t.arena = arena_alloc(req.arena_bytes);
     scratch = arena_alloc(req.scratch_bytes);
     CHECK_STATUS(coray_kdtree_build(scene, &p, t.arena, t.bytes, scratch, req.scratch_bytes, NULL), CORAY_STATUS_OK);
     free(scratch);
+    CHECK_STATUS(coray_kdtree_open(t.arena, t.bytes, scene, &t.tree), CORAY_STATUS_OK);
     return t;
 }
 

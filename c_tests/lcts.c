@@ -15,49 +15,51 @@ static CorayCamera camera(uint32_t w, uint32_t h) {
     return c;
 }
 
+static KdStack stack;
+
 int main(void) {
     TestScene ts;
     Tree tree;
     CorayCamera cam = camera(97, 61);
     size_t n = (size_t)cam.width * cam.height, i;
-    float *t_ref = malloc(n * sizeof(float)), *t = malloc(n * sizeof(float));
-    uint32_t *p_ref = malloc(n * sizeof(uint32_t)), *p = malloc(n * sizeof(uint32_t));
+    CorayHit *ref = malloc(n * sizeof(CorayHit)), *hits = malloc(n * sizeof(CorayHit));
     uint32_t scheme;
     CorayCastParams cp = coray_cast_params_default();
-    CorayCastStats st, st_ref;
-    size_t bytes = 0;
+    CorayTraceStats st = stats0(), st_ref = stats0();
+    CorayRequirements cr = requirements0();
     void *scratch;
     rng_state = 31;
     ts = scene_random(3000, 400, 400, 1.0f);
     tree = tree_build(&ts.view, CORAY_KD_PRESET_PAPER);
 
-    cp.scheme = CORAY_SCHEME_HIERARCHICAL;
-    CHECK_STATUS(coray_cast_requirements(&cam, &cp, &bytes), CORAY_STATUS_OK);
-    CHECK(bytes == 0);
-    CHECK_STATUS(coray_kdtree_cast_image(tree.arena, tree.bytes, &ts.view, &cam, &cp, NULL, 0, t_ref, p_ref, &st_ref), CORAY_STATUS_OK);
+    cp.scheme = CORAY_CAST_HIERARCHICAL;
+    CHECK_STATUS(coray_kdtree_cast_requirements(&cam, &cp, &cr), CORAY_STATUS_OK);
+    CHECK(cr.scratch_bytes == 0 && cr.stack_bytes == CORAY_KDTREE_STACK_BYTES);
+    CHECK_STATUS(coray_kdtree_cast_image(&tree.tree, &cam, &cp, NULL, 0, &stack, sizeof stack, ref, &st_ref), CORAY_STATUS_OK);
     {
-        size_t hits = 0;
-        for (i = 0; i < n; i++) hits += p_ref[i] != CORAY_INVALID_ID;
-        CHECK(hits > n / 10);
+        size_t nhit = 0;
+        for (i = 0; i < n; i++) nhit += ref[i].geom_id != CORAY_INVALID_ID;
+        CHECK(nhit > n / 10);
     }
-    for (scheme = CORAY_SCHEME_ROPES; scheme <= CORAY_SCHEME_HLCTS_2D; scheme++) {
+    for (scheme = CORAY_CAST_ROPES; scheme <= CORAY_CAST_HLCTS_2D; scheme++) {
         cp = coray_cast_params_default();
         cp.scheme = scheme;
-        CHECK_STATUS(coray_cast_requirements(&cam, &cp, &bytes), CORAY_STATUS_OK);
-        scratch = arena_alloc(bytes);
-        if (bytes > 0) {
-            CHECK_STATUS(coray_kdtree_cast_image(tree.arena, tree.bytes, &ts.view, &cam, &cp, scratch, bytes - 1, t, p, &st), CORAY_STATUS_ARENA_TOO_SMALL);
+        CHECK_STATUS(coray_kdtree_cast_requirements(&cam, &cp, &cr), CORAY_STATUS_OK);
+        scratch = arena_alloc(cr.scratch_bytes);
+        if (cr.scratch_bytes > 0) {
+            CHECK_STATUS(coray_kdtree_cast_image(&tree.tree, &cam, &cp, scratch, cr.scratch_bytes - 1, &stack, sizeof stack, hits, &st), CORAY_STATUS_ARENA_TOO_SMALL);
+            /* The scratch and the hits in one buffer. */
+            CHECK_STATUS(coray_kdtree_cast_image(&tree.tree, &cam, &cp, hits, cr.scratch_bytes, &stack, sizeof stack, hits, &st), CORAY_STATUS_INVALID_PARAMETER);
         }
-        memset(t, 0, n * sizeof(float));
-        CHECK_STATUS(coray_kdtree_cast_image(tree.arena, tree.bytes, &ts.view, &cam, &cp, scratch, bytes, t, p, &st), CORAY_STATUS_OK);
-        CHECK(memcmp(t, t_ref, n * sizeof(float)) == 0);
-        CHECK(memcmp(p, p_ref, n * sizeof(uint32_t)) == 0);
-        if (scheme >= CORAY_SCHEME_SLCTS_1D) CHECK(st.windows > 0);
+        memset(hits, 0, n * sizeof(CorayHit));
+        CHECK_STATUS(coray_kdtree_cast_image(&tree.tree, &cam, &cp, scratch, cr.scratch_bytes, &stack, sizeof stack, hits, &st), CORAY_STATUS_OK);
+        CHECK(memcmp(hits, ref, n * sizeof(CorayHit)) == 0);
+        if (scheme >= CORAY_CAST_SLCTS_1D) CHECK(st.windows > 0);
         /* Only SLCTS windows without a shared leaf start at an entry node. */
         CHECK(st.windows_entered <= st.windows - st.windows_shared);
-        if (scheme != CORAY_SCHEME_SLCTS_1D && scheme != CORAY_SCHEME_SLCTS_2D) CHECK(st.windows_entered == 0);
+        if (scheme != CORAY_CAST_SLCTS_1D && scheme != CORAY_CAST_SLCTS_2D) CHECK(st.windows_entered == 0);
         printf("scheme %u: %llu traversal steps (hierarchical %llu), %llu windows, %llu shared, %llu entered\n", scheme,
-               (unsigned long long)st.trace.traversal_steps, (unsigned long long)st_ref.trace.traversal_steps,
+               (unsigned long long)st.traversal_steps, (unsigned long long)st_ref.traversal_steps,
                (unsigned long long)st.windows, (unsigned long long)st.windows_shared,
                (unsigned long long)st.windows_entered);
         free(scratch);
@@ -65,35 +67,47 @@ int main(void) {
     /* Bad parameters. */
     cp = coray_cast_params_default();
     cp.scheme = 9;
-    CHECK_STATUS(coray_cast_requirements(&cam, &cp, &bytes), CORAY_STATUS_INVALID_PARAMETER);
+    CHECK_STATUS(coray_kdtree_cast_requirements(&cam, &cp, &cr), CORAY_STATUS_INVALID_PARAMETER);
     cp = coray_cast_params_default();
     cp.window_width = 1;
-    CHECK_STATUS(coray_cast_requirements(&cam, &cp, &bytes), CORAY_STATUS_INVALID_PARAMETER);
+    CHECK_STATUS(coray_kdtree_cast_requirements(&cam, &cp, &cr), CORAY_STATUS_INVALID_PARAMETER);
     cp = coray_cast_params_default();
     cp.history_capacity = 0;
-    CHECK_STATUS(coray_cast_requirements(&cam, &cp, &bytes), CORAY_STATUS_INVALID_PARAMETER);
+    CHECK_STATUS(coray_kdtree_cast_requirements(&cam, &cp, &cr), CORAY_STATUS_INVALID_PARAMETER);
     {
         CorayCamera bad = cam;
         bad.width = 0;
         cp = coray_cast_params_default();
-        CHECK_STATUS(coray_cast_requirements(&bad, &cp, &bytes), CORAY_STATUS_INVALID_PARAMETER);
+        CHECK_STATUS(coray_kdtree_cast_requirements(&bad, &cp, &cr), CORAY_STATUS_INVALID_PARAMETER);
         bad = cam;
         bad.angle_deg = NAN;
-        CHECK_STATUS(coray_cast_requirements(&bad, &cp, &bytes), CORAY_STATUS_INVALID_PARAMETER);
-        CHECK_STATUS(coray_cast_requirements(NULL, &cp, &bytes), CORAY_STATUS_NULL_POINTER);
+        CHECK_STATUS(coray_kdtree_cast_requirements(&bad, &cp, &cr), CORAY_STATUS_INVALID_PARAMETER);
+        bad = cam;
+        memcpy(bad.at, bad.from, sizeof bad.at); /* the eye on the point looked at */
+        CHECK_STATUS(coray_kdtree_cast_requirements(&bad, &cp, &cr), CORAY_STATUS_INVALID_PARAMETER);
+        bad = cam;
+        bad.up[0] = bad.at[0] - bad.from[0]; /* up along the view */
+        bad.up[1] = bad.at[1] - bad.from[1];
+        bad.up[2] = bad.at[2] - bad.from[2];
+        CHECK_STATUS(coray_kdtree_cast_requirements(&bad, &cp, &cr), CORAY_STATUS_INVALID_PARAMETER);
+        CHECK_STATUS(coray_kdtree_cast_requirements(NULL, &cp, &cr), CORAY_STATUS_NULL_POINTER);
     }
     cp = coray_cast_params_default();
-    CHECK_STATUS(coray_kdtree_cast_image(tree.arena, tree.bytes, &ts.view, &cam, &cp, NULL, 0, t, p, NULL), CORAY_STATUS_NULL_POINTER);
+    CHECK_STATUS(coray_kdtree_cast_image(&tree.tree, &cam, &cp, NULL, 0, &stack, sizeof stack, hits, NULL), CORAY_STATUS_NULL_POINTER);
 
     /* Patch-to-patch visibility against casting the same segments. */
     {
-        size_t pb = coray_patch_requirements(512);
-        void *ps = arena_alloc(pb);
+        CorayRequirements pr_req = requirements0();
+        void *ps;
         int pair, partial = 0;
+        CHECK_STATUS(coray_kdtree_patch_requirements(512, &pr_req), CORAY_STATUS_OK);
+        ps = arena_alloc(pr_req.scratch_bytes);
         for (pair = 0; pair < 20; pair++) {
             float a[12], b[12], u[3], v[3], ca[3], cb[3];
             int k, ia, ib, nside = 4, visible = 0;
             CorayPatchResult r;
+            memset(&r, 0, sizeof r);
+            r.struct_size = sizeof r;
             for (k = 0; k < 3; k++) {
                 ca[k] = rng_range(-1, 1);
                 cb[k] = rng_range(-1, 1);
@@ -110,7 +124,7 @@ int main(void) {
                 b[3 + k] = cb[k] + s * v[k];
                 b[6 + k] = cb[k] + s * u[k];
             }
-            CHECK_STATUS(coray_kdtree_patch_visibility(tree.arena, tree.bytes, &ts.view, a, 4, b, 3, (uint32_t)nside, 1e-4f, ps, pb, &r), CORAY_STATUS_OK);
+            CHECK_STATUS(coray_kdtree_patch_visibility(&tree.tree, a, 4, b, 3, (uint32_t)nside, 1e-4f, ps, pr_req.scratch_bytes, &stack, sizeof stack, &r, &st), CORAY_STATUS_OK);
             /* The same sample points: bilinear on the quad, the triangle map on the triangle. */
             for (ia = 0; ia < nside * nside; ia++) {
                 float su = (float)(ia % nside) / (float)(nside - 1), sv = (float)(ia / nside) / (float)(nside - 1), P[3];
@@ -129,7 +143,7 @@ int main(void) {
                     }
                     ray.tnear = 1e-4f;
                     ray.tfar = 1.0f - 1e-4f;
-                    CHECK_STATUS(coray_kdtree_intersect1(tree.arena, tree.bytes, &ts.view, CORAY_TRAVERSAL_HIERARCHICAL, &ray, &h, NULL), CORAY_STATUS_OK);
+                    CHECK_STATUS(coray_kdtree_intersect1(&tree.tree, CORAY_TRAVERSAL_HIERARCHICAL, &ray, &h, &stack, sizeof stack, NULL), CORAY_STATUS_OK);
                     visible += h.geom_id == CORAY_INVALID_ID;
                 }
             }
@@ -141,16 +155,19 @@ int main(void) {
         CHECK(partial > 0);
         {
             float a[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+            float b[9] = {0, 0, 2, 1, 0, 2, 0, 1, 2};
             CorayPatchResult r;
-            CHECK_STATUS(coray_kdtree_patch_visibility(tree.arena, tree.bytes, &ts.view, a, 2, a, 3, 4, 1e-4f, ps, pb, &r), CORAY_STATUS_INVALID_PARAMETER);
-            CHECK_STATUS(coray_kdtree_patch_visibility(tree.arena, tree.bytes, &ts.view, a, 3, a, 3, 4, 1e-4f, ps, 8, &r), CORAY_STATUS_ARENA_TOO_SMALL);
+            memset(&r, 0, sizeof r);
+            r.struct_size = sizeof r;
+            CHECK_STATUS(coray_kdtree_patch_visibility(&tree.tree, a, 2, b, 3, 4, 1e-4f, ps, pr_req.scratch_bytes, &stack, sizeof stack, &r, NULL), CORAY_STATUS_INVALID_PARAMETER);
+            CHECK_STATUS(coray_kdtree_patch_visibility(&tree.tree, a, 3, b, 3, 4, 1e-4f, ps, 8, &stack, sizeof stack, &r, NULL), CORAY_STATUS_ARENA_TOO_SMALL);
+            /* 256 samples per side would count 2^32 segments in 32 bits: refused. */
+            CHECK_STATUS(coray_kdtree_patch_visibility(&tree.tree, a, 3, b, 3, 256, 1e-4f, ps, pr_req.scratch_bytes, &stack, sizeof stack, &r, NULL), CORAY_STATUS_INVALID_PARAMETER);
         }
         free(ps);
     }
-    free(t_ref);
-    free(t);
-    free(p_ref);
-    free(p);
+    free(ref);
+    free(hits);
     free(tree.arena);
     scene_free(&ts);
     return finish("lcts");

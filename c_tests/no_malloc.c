@@ -44,15 +44,18 @@ void *memalign(size_t align, size_t n) {
 
 #include "common.h"
 
+static KdStack stack;
+
 int main(void) {
     TestScene ts;
-    CorayKdRequirements req;
+    CorayRequirements req = requirements0();
     void *arena, *scratch;
     CorayRay *rays;
     CorayHit *hits;
     uint8_t *occ;
-    CorayTraceStats st;
-    CorayKdTreeStats tst;
+    CorayTraceStats st = stats0();
+    CorayShape shape = shape0();
+    CorayKdTree tree;
     size_t n, nr = 20000;
     uint32_t preset, trav;
     long probe;
@@ -74,23 +77,24 @@ int main(void) {
     alloc_calls = 0;
 
     for (preset = 0; preset < 2; preset++) {
-        CorayKdParams p = coray_kd_params_default(preset);
+        CorayKdParams p = coray_kdtree_params_default(preset);
         CHECK_STATUS(coray_kdtree_requirements(n, &p, &req), CORAY_STATUS_OK);
-        arena = arena_alloc(req.tree_bytes);
+        arena = arena_alloc(req.arena_bytes);
         scratch = arena_alloc(req.scratch_bytes);
         counting = 1;
-        CHECK_STATUS(coray_kdtree_build(&ts.view, &p, arena, req.tree_bytes, scratch, req.scratch_bytes, NULL), CORAY_STATUS_OK);
-        CHECK_STATUS(coray_kdtree_validate(arena, req.tree_bytes, &ts.view, &tst), CORAY_STATUS_OK);
+        CHECK_STATUS(coray_kdtree_build(&ts.view, &p, arena, req.arena_bytes, scratch, req.scratch_bytes, NULL), CORAY_STATUS_OK);
+        CHECK_STATUS(coray_kdtree_open(arena, req.arena_bytes, &ts.view, &tree), CORAY_STATUS_OK);
+        CHECK_STATUS(coray_kdtree_validate(&tree, NULL, 0, &shape), CORAY_STATUS_OK);
         for (trav = 0; trav < 2; trav++) {
-            CHECK_STATUS(coray_kdtree_intersect(arena, req.tree_bytes, &ts.view, trav, rays, hits, nr, &st), CORAY_STATUS_OK);
-            CHECK_STATUS(coray_kdtree_occluded(arena, req.tree_bytes, &ts.view, trav, rays, occ, nr, &st), CORAY_STATUS_OK);
-            CHECK_STATUS(coray_kdtree_intersect1(arena, req.tree_bytes, &ts.view, trav, rays, hits, &st), CORAY_STATUS_OK);
+            CHECK_STATUS(coray_kdtree_intersect(&tree, trav, rays, hits, nr, &stack, sizeof stack, &st), CORAY_STATUS_OK);
+            CHECK_STATUS(coray_kdtree_occluded(&tree, trav, rays, occ, nr, &stack, sizeof stack, &st), CORAY_STATUS_OK);
+            CHECK_STATUS(coray_kdtree_intersect1(&tree, trav, rays, hits, &stack, sizeof stack, &st), CORAY_STATUS_OK);
         }
         /* LCTS image casting and patch visibility, scratch allocated before counting. */
         {
             CorayCamera cam;
             CorayCastParams cp = coray_cast_params_default();
-            size_t cb = 0, pb = coray_patch_requirements(256);
+            CorayRequirements cr = requirements0(), pr_req = requirements0();
             uint32_t sch;
             float a[12] = {-0.5f, -0.5f, 1.5f, 0.5f, -0.5f, 1.5f, 0.5f, 0.5f, 1.5f, -0.5f, 0.5f, 1.5f};
             float b[9] = {-0.3f, -0.3f, -1.5f, 0.3f, -0.3f, -1.5f, 0.0f, 0.3f, -1.5f};
@@ -103,24 +107,28 @@ int main(void) {
             cam.angle_deg = 45.0f;
             cam.width = 64;
             cam.height = 48;
+            memset(&pr, 0, sizeof pr);
+            pr.struct_size = sizeof pr;
             counting = 0;
-            cp.scheme = CORAY_SCHEME_HLCTS_2D;
-            CHECK_STATUS(coray_cast_requirements(&cam, &cp, &cb), CORAY_STATUS_OK);
-            cs = arena_alloc(cb);
-            ps = arena_alloc(pb);
+            cp.scheme = CORAY_CAST_HLCTS_2D;
+            CHECK_STATUS(coray_kdtree_cast_requirements(&cam, &cp, &cr), CORAY_STATUS_OK);
+            CHECK_STATUS(coray_kdtree_patch_requirements(256, &pr_req), CORAY_STATUS_OK);
+            cs = arena_alloc(cr.scratch_bytes);
+            ps = arena_alloc(pr_req.scratch_bytes);
             counting = 1;
-            for (sch = CORAY_SCHEME_SLCTS_1D; sch <= CORAY_SCHEME_HLCTS_2D; sch++) {
+            for (sch = CORAY_CAST_SLCTS_1D; sch <= CORAY_CAST_HLCTS_2D; sch++) {
                 cp.scheme = sch;
-                CHECK_STATUS(coray_kdtree_cast_image(arena, req.tree_bytes, &ts.view, &cam, &cp, cs, cb, (float *)hits, (uint32_t *)rays, NULL), CORAY_STATUS_OK);
+                CHECK_STATUS(coray_kdtree_cast_image(&tree, &cam, &cp, cs, cr.scratch_bytes, &stack, sizeof stack, hits, NULL), CORAY_STATUS_OK);
             }
-            CHECK_STATUS(coray_kdtree_patch_visibility(arena, req.tree_bytes, &ts.view, a, 4, b, 3, 4, 1e-4f, ps, pb, &pr), CORAY_STATUS_OK);
+            CHECK_STATUS(coray_kdtree_patch_visibility(&tree, a, 4, b, 3, 4, 1e-4f, ps, pr_req.scratch_bytes, &stack, sizeof stack, &pr, &st), CORAY_STATUS_OK);
             counting = 0;
             free(cs);
             free(ps);
             counting = 1;
         }
         /* Error paths too. */
-        CHECK_STATUS(coray_kdtree_intersect(arena, 10, &ts.view, 0, rays, hits, nr, &st), CORAY_STATUS_CORRUPT_ARENA);
+        CHECK_STATUS(coray_kdtree_open(arena, 10, &ts.view, &tree), CORAY_STATUS_CORRUPT_ARENA);
+        CHECK_STATUS(coray_kdtree_intersect(&tree, 0, rays, hits, nr, &stack, 16, &st), CORAY_STATUS_ARENA_TOO_SMALL);
         counting = 0;
         printf("preset %u: %ld allocator calls during build, validate and %zu x 5 traces\n", preset, alloc_calls, nr);
         CHECK(alloc_calls == 0);

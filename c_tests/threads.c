@@ -19,9 +19,10 @@ typedef struct {
 
 static void *run(void *arg) {
     Job *j = arg;
-    CorayStatus s = coray_kdtree_intersect(j->tree->arena, j->tree->bytes, j->scene, j->traversal, j->rays, j->hits, RAYS, NULL);
+    KdStack stack; /* one stack per thread; the tree handle is shared */
+    CorayStatus s = coray_kdtree_intersect(&j->tree->tree, j->traversal, j->rays, j->hits, RAYS, &stack, sizeof stack, NULL);
     if (s == CORAY_STATUS_OK)
-        s = coray_kdtree_occluded(j->tree->arena, j->tree->bytes, j->scene, j->traversal, j->rays, j->occ, RAYS, NULL);
+        s = coray_kdtree_occluded(&j->tree->tree, j->traversal, j->rays, j->occ, RAYS, &stack, sizeof stack, NULL);
     j->status = s;
     return NULL;
 }
@@ -41,8 +42,9 @@ int main(void) {
     tree = tree_build(&ts.view, CORAY_KD_PRESET_AUTO);
     rays_random(rays, RAYS, 1.0f);
     for (trav = 0; trav < 2; trav++) {
-        CHECK_STATUS(coray_kdtree_intersect(tree.arena, tree.bytes, &ts.view, trav, rays, ref, RAYS, NULL), CORAY_STATUS_OK);
-        CHECK_STATUS(coray_kdtree_occluded(tree.arena, tree.bytes, &ts.view, trav, rays, ref_occ, RAYS, NULL), CORAY_STATUS_OK);
+        KdStack stack;
+        CHECK_STATUS(coray_kdtree_intersect(&tree.tree, trav, rays, ref, RAYS, &stack, sizeof stack, NULL), CORAY_STATUS_OK);
+        CHECK_STATUS(coray_kdtree_occluded(&tree.tree, trav, rays, ref_occ, RAYS, &stack, sizeof stack, NULL), CORAY_STATUS_OK);
         for (i = 0; i < THREADS; i++) {
             jobs[i].tree = &tree;
             jobs[i].scene = &ts.view;

@@ -10,173 +10,64 @@
 #include <stddef.h>
 #include <stdint.h>
 
-// Top-down binary splitting, children of most nearly equal surface area (the thesis' TDBS).
-#define CORAY_BVH_TDBS 0
+// Major version of the C ABI: changes only with an incompatible change.
+#define CORAY_VERSION_MAJOR 1
 
-// Top-down binary splitting by the surface area heuristic.
-#define CORAY_BVH_TDBS_SAH 1
+// Minor version: new functions or struct fields, compatible.
+#define CORAY_VERSION_MINOR 0
 
-// Bottom-up matching: join the pair with the smallest joint box, repeatedly.
-#define CORAY_BVH_NN 2
-
-// Guttman's R-tree (quadratic split); dynamic.
-#define CORAY_BVH_RTREE 3
-
-// The R*-tree (no forced reinsertion); dynamic.
-#define CORAY_BVH_RSTAR 4
-
-// Bottom-up matching by a nearest-neighbour chain: the joins of
-// `CORAY_BVH_NN` (exact ties aside) in sub-quadratic time.
-#define CORAY_BVH_NN_CHAIN 5
-
-// R-trees insert in scene order.
-#define CORAY_BVH_ORDER_SCENE 0
-
-// R-trees insert in a shuffled order (`seed`).
-#define CORAY_BVH_ORDER_SHUFFLED 1
-
-// R-trees insert in Morton order of the box centres.
-#define CORAY_BVH_ORDER_SORTED 2
-
-// Every pixel by hierarchical traversal (the reference).
-#define CORAY_SCHEME_HIERARCHICAL 0
-
-// Every pixel by rope traversal.
-#define CORAY_SCHEME_ROPES 1
-
-// SLCTS on each scanline, windows of `window_width x 1` pixels.
-#define CORAY_SCHEME_SLCTS_1D 2
-
-// SLCTS in windows of `window_width x window_height` pixels.
-#define CORAY_SCHEME_SLCTS_2D 3
-
-// HLCTS by bisection of each scanline.
-#define CORAY_SCHEME_HLCTS_1D 4
-
-// HLCTS by 2D bisection, alternating axes.
-#define CORAY_SCHEME_HLCTS_2D 5
-
-// Structure built on the primitives' rectangles on the plane.
-#define CORAY_PROJ_CRITERIA_2D 0
-
-// "Dummy": a 3D structure whose nodes carry their children's rectangles.
-#define CORAY_PROJ_CRITERIA_DUMMY 1
-
-// Nodes tested by the ray's point in their rectangle (4 comparisons).
-#define CORAY_PROJ_SCHEME_2D 0
-
-// Nodes tested by the ray against their 3D box.
-#define CORAY_PROJ_SCHEME_3D 1
-
-// The rectangle first, the 3D box when the rectangle holds the point.
-#define CORAY_PROJ_SCHEME_COMBINATION 2
-
-// A central projection.
-#define CORAY_PLANE_PERSPECTIVE 0
-
-// A parallel projection.
-#define CORAY_PLANE_ORTHOGRAPHIC 1
-
-// A point light.
-#define CORAY_LIGHT_POINT 0
-
-// A directional light.
-#define CORAY_LIGHT_DIRECTIONAL 1
-
-// Build with SAH-driven termination (depth bound from N). Default.
-#define CORAY_KD_PRESET_AUTO 0
-
-// Build with the LCTS paper's settings: depth 16, leaves of at most 2.
-#define CORAY_KD_PRESET_PAPER 1
-
-// Hierarchical (stack) traversal, Havran's TA_B^rec.
-#define CORAY_TRAVERSAL_HIERARCHICAL 0
-
-// Rope traversal, leaf to leaf.
-#define CORAY_TRAVERSAL_ROPES 1
-
-// `geom_id` of the triangle mesh in a hit.
-#define CORAY_GEOM_TRIANGLES 0
-
-// `geom_id` of the spheres in a hit.
-#define CORAY_GEOM_SPHERES 1
-
-// `geom_id` of the cones in a hit.
-#define CORAY_GEOM_CONES 2
+// Patch version: fixes only.
+#define CORAY_VERSION_PATCH 0
 
 // `geom_id` and `prim_id` of a miss.
 #define CORAY_INVALID_ID 4294967295
 
-// Alignment, in bytes, of every arena passed to coray.
+// Alignment, in bytes, of every arena, scratch and stack passed to coray.
 #define CORAY_ARENA_ALIGN 16
 
-// Status of every entry point. Numbers are fixed forever.
+// Bytes of the traversal stack every kd-tree trace and cast takes.
+#define CORAY_KDTREE_STACK_BYTES 2480
+
+// Status of every entry point. Numbers are fixed forever; docs/c-api.md
+// says which situations give which status.
 typedef enum CorayStatus {
   // Success; outputs written.
   CORAY_STATUS_OK = 0,
   // A required pointer was NULL.
   CORAY_STATUS_NULL_POINTER = 1,
-  // An arena (16 bytes) or an input array (its element's alignment) is misaligned.
+  // An arena or stack (16 bytes), an array or struct (its element's
+  // alignment) is misaligned.
   CORAY_STATUS_MISALIGNED = 2,
-  // An arena is smaller than the minimum; the bytes needed are reported.
+  // An arena, scratch or stack is smaller than needed; a build reports
+  // the bytes needed.
   CORAY_STATUS_ARENA_TOO_SMALL = 3,
-  // A parameter is out of its documented range, or `struct_size` is wrong.
+  // A parameter is out of its documented range, a `struct_size` is too
+  // small, buffers overlap, a handle was not filled by its open call,
+  // or a ray is not one the structure takes.
   CORAY_STATUS_INVALID_PARAMETER = 4,
   // A triangle names a vertex that does not exist.
   CORAY_STATUS_INDEX_OUT_OF_RANGE = 5,
-  // More primitives than the structure can index (2^30), or an arena over 4 GiB.
+  // More primitives than a structure can index (2^30), or an arena over
+  // 4 GiB.
   CORAY_STATUS_TOO_MANY_PRIMITIVES = 6,
-  // A tree arena fails its header checks or its validation.
+  // An arena fails its header checks or its validation, or a trace met
+  // a broken invariant of an arena that was never validated.
   CORAY_STATUS_CORRUPT_ARENA = 7,
-  // The scene passed to a trace call is not the one the tree was built on.
+  // The scene is not the one the arena was built on.
   CORAY_STATUS_SCENE_MISMATCH = 8,
   // A bug in coray (a caught panic). Please report it.
   CORAY_STATUS_INTERNAL_ERROR = 9,
 } CorayStatus;
 
-// Parameters of a hierarchy build. Get them from [`coray_bvh_params_default`].
-typedef struct CorayBvhParams {
-  // `sizeof(CorayBvhParams)`.
-  size_t struct_size;
-  // R-trees: the shuffle's seed with `CORAY_BVH_ORDER_SHUFFLED`.
-  uint64_t seed;
-  // `CORAY_BVH_TDBS`, `_TDBS_SAH`, `_NN`, `_NN_CHAIN`, `_RTREE` or `_RSTAR`.
-  uint32_t builder;
-  // TDBS builders: most primitives per leaf (at least 1; the thesis: 1).
-  // Bottom-up matching always makes leaves of 1.
-  uint32_t leaf_size;
-  // R-trees: M, most entries per node, 4 to 32 (default 8).
-  uint32_t max_children;
-  // R-trees: m, fewest entries per node but the root, 2 to M / 2 (default 3).
-  uint32_t min_children;
-  // R-trees: `CORAY_BVH_ORDER_*`, the order a build inserts the primitives.
-  uint32_t insert_order;
-  // R-trees: 1 to build an empty tree (objects then enter by
-  // [`coray_bvh_insert`]); 0 to insert every primitive.
-  uint32_t start_empty;
-  // R-trees: 1 for the R*-tree's forced reinsertion (the first overflow
-  // at a level during an insert reinserts 30% of the node's entries
-  // instead of splitting); 0, the default and the thesis' setting, splits.
-  uint32_t forced_reinsert;
-} CorayBvhParams;
-
-// Arena sizes for a hierarchy, from [`coray_bvh_requirements`].
-typedef struct CorayBvhRequirements {
-  // The hierarchy arena. Static builders need exactly this; an R-tree's
-  // arena of this size holds up to `prim_count` objects, and a larger one
-  // proportionally more.
-  size_t bvh_bytes;
-  // Scratch for a build, and for an R-tree's deletes.
-  size_t scratch_bytes;
-} CorayBvhRequirements;
-
 // The primitives, borrowed for the duration of each call (coray keeps no
-// pointer). A tree stores primitive indices, not copies: pass the same
-// scene, unchanged, to every trace call on that tree.
+// pointer but inside the handles of the open calls). A structure stores
+// primitive indices, not copies: pass the same scene, unchanged, to every
+// call on it.
 //
 // Arrays may be NULL when their count is 0. Degenerate primitives (zero
 // area, zero or negative radius, NaN or infinite coordinates) are allowed
-// and never hit.
+// and never hit. A primitive is named by its geometry and its index in
+// that geometry's array, in hits and everywhere else.
 typedef struct CorayScene {
   // `sizeof(CorayScene)`.
   size_t struct_size;
@@ -186,42 +77,146 @@ typedef struct CorayScene {
   size_t vertex_count;
   // `3 * triangle_count` vertex indices.
   const uint32_t *indices;
-  // Number of triangles (geometry id 0).
+  // Number of triangles (`CORAY_GEOM_TRIANGLES`).
   size_t triangle_count;
   // `4 * sphere_count` floats: x y z radius (Embree's sphere points).
   const float *spheres;
-  // Number of spheres (geometry id 1).
+  // Number of spheres (`CORAY_GEOM_SPHERES`).
   size_t sphere_count;
   // `8 * cone_count` floats: base x y z, base radius, apex x y z, apex
   // radius; open cones and cylinders, no caps (NFF's `c`).
   const float *cones;
-  // Number of cones (geometry id 2).
+  // Number of cones (`CORAY_GEOM_CONES`).
   size_t cone_count;
 } CorayScene;
 
-// What a hierarchy holds (read from its arena header, O(1)).
+// What one object needs, in bytes, from `coray_<object>_requirements`.
+// Fields an object has no use for are 0.
+typedef struct CorayRequirements {
+  // `sizeof(CorayRequirements)`.
+  size_t struct_size;
+  // Smallest arena a build accepts.
+  size_t arena_min_bytes;
+  // The arena to give it: enough that ordinary scenes build unhindered.
+  size_t arena_bytes;
+  // Smallest scratch a build (or a cast, a query) accepts.
+  size_t scratch_min_bytes;
+  // The scratch to give it with `arena_bytes`.
+  size_t scratch_bytes;
+  // Traversal stack every trace and validate call on the result needs
+  // (an upper bound before the build; the info call gives the exact
+  // figure after it).
+  size_t stack_bytes;
+} CorayRequirements;
+
+// What a validate call found: the structure's shape.
+typedef struct CorayShape {
+  // `sizeof(CorayShape)`.
+  size_t struct_size;
+  // Nodes reached from the root, interior and leaf.
+  uint32_t node_count;
+  // Leaves reached.
+  uint32_t leaf_count;
+  // Leaves holding no primitive.
+  uint32_t empty_leaf_count;
+  // Primitive references in the leaves.
+  uint32_t ref_count;
+  // Depth of the deepest leaf (root: 0).
+  uint32_t depth;
+} CorayShape;
+
+// Work done by one trace call, for every object. Fields an object has no
+// use for stay 0. Set `struct_size`; coray writes that many bytes.
+typedef struct CorayTraceStats {
+  // `sizeof(CorayTraceStats)`.
+  size_t struct_size;
+  // Rays traced.
+  uint64_t rays;
+  // Nodes visited, interior plus leaf (TSPR = this / rays).
+  uint64_t traversal_steps;
+  // Interior nodes visited.
+  uint64_t interior_steps;
+  // Leaves visited.
+  uint64_t leaf_steps;
+  // Empty leaves visited.
+  uint64_t empty_leaf_steps;
+  // Ray-primitive tests.
+  uint64_t prim_tests;
+  // Hierarchies: hierarchy objects (3D boxes, 2D rectangles) tested.
+  uint64_t box_tests;
+  // Hierarchies: their cost in the thesis' units (a box test costs 2 to 51).
+  uint64_t box_cost;
+  // Hierarchies: the primitives' cost in the same units.
+  uint64_t prim_cost;
+  // Projection hierarchies: point-in-rectangle tests among `box_tests`.
+  uint64_t rect_tests;
+  // LCTS casts: shafts (windows, intervals, rectangles) given a common sequence.
+  uint64_t windows;
+  // Of those, shafts whose sequence starts with a shared leaf (gamma = this / windows).
+  uint64_t windows_shared;
+  // Shafts with a termination object.
+  uint64_t windows_terminated;
+  // SLCTS windows without a shared leaf whose rays started below the
+  // root, at their corners' deepest common node.
+  uint64_t windows_entered;
+} CorayTraceStats;
+
+// How a hierarchy is built: one of the `CORAY_BVH_BUILDER_*`.
+typedef uint32_t CorayBvhBuilder;
+
+// The order an R-tree build inserts the primitives in: `CORAY_BVH_ORDER_*`.
+typedef uint32_t CorayBvhOrder;
+
+// Parameters of a hierarchy build. Get them from `coray_bvh_params_default`.
+typedef struct CorayBvhParams {
+  // `sizeof(CorayBvhParams)`.
+  size_t struct_size;
+  // R-trees: the shuffle's seed with `CORAY_BVH_ORDER_SHUFFLED`.
+  uint64_t seed;
+  // `CORAY_BVH_BUILDER_*`.
+  CorayBvhBuilder builder;
+  // TDBS builders: most primitives per leaf (at least 1; the thesis: 1).
+  // Bottom-up matching always makes leaves of 1.
+  uint32_t leaf_size;
+  // R-trees: M, most entries per node, 4 to 32 (default 8).
+  uint32_t max_children;
+  // R-trees: m, fewest entries per node but the root, 2 to M / 2 (default 3).
+  uint32_t min_children;
+  // R-trees: `CORAY_BVH_ORDER_*`, the order a build inserts the primitives.
+  CorayBvhOrder insert_order;
+  // R-trees: 1 to build an empty tree (objects then enter by
+  // `coray_bvh_insert`); 0 to insert every primitive.
+  uint32_t start_empty;
+  // R-trees: 1 for the R*-tree's forced reinsertion (the first overflow
+  // at a level during an insert reinserts 30% of the node's entries
+  // instead of splitting); 0, the default and the thesis' setting, splits.
+  uint32_t forced_reinsert;
+} CorayBvhParams;
+
+// What a hierarchy holds, from `coray_bvh_info` (O(1)).
 typedef struct CorayBvhInfo {
-  // The builder, `CORAY_BVH_*`.
-  uint32_t builder;
+  // `sizeof(CorayBvhInfo)`.
+  size_t struct_size;
+  // The builder, `CORAY_BVH_BUILDER_*`.
+  CorayBvhBuilder builder;
   // Nodes in use, interior and leaf.
   uint32_t node_count;
   // Leaves in use.
   uint32_t leaf_count;
   // Primitives in the hierarchy.
-  uint32_t object_count;
+  uint32_t ref_count;
   // Levels below the root.
   uint32_t depth;
   // Most children a node may have (2, or the R-tree's M).
   uint32_t max_children;
   // Most objects the hierarchy may hold: for an R-tree, what its arena
   // holds whatever the order of inserts and deletes (inserts beyond it
-  // get `CORAY_STATUS_ARENA_TOO_SMALL`); static builders: `object_count`.
+  // get `CORAY_STATUS_ARENA_TOO_SMALL`); static builders: `ref_count`.
   uint32_t capacity;
   // Bytes of the arena the layout covers.
   size_t arena_bytes_used;
-  // Bytes of traversal stack that [`coray_bvh_intersect`] and
-  // [`coray_bvh_occluded`] need (4-byte aligned). Inserts can deepen an
-  // R-tree: read it again after them.
+  // Bytes of traversal stack every trace and validate call needs.
+  // Inserts can deepen an R-tree: read it again after them.
   size_t stack_bytes;
   // Lower corner of the root box (empty hierarchy: +inf).
   float bounds_min[3];
@@ -229,20 +224,21 @@ typedef struct CorayBvhInfo {
   float bounds_max[3];
 } CorayBvhInfo;
 
-// Figures of a validated hierarchy, from [`coray_bvh_validate`].
-typedef struct CorayBvhTreeStats {
-  // Nodes reached from the root.
-  uint32_t node_count;
-  // Leaves reached.
-  uint32_t leaf_count;
-  // References in them.
-  uint32_t ref_count;
-  // Deepest leaf.
-  uint32_t depth;
-} CorayBvhTreeStats;
+// An opened hierarchy: fill it with `coray_bvh_open`. It reads the
+// arena's header on each call, so an R-tree changed by `coray_bvh_insert`
+// and `coray_bvh_delete` needs no new handle.
+typedef struct CorayBvh {
+  // Opaque to the caller.
+  uint64_t opaque[32];
+} CorayBvh;
 
-// A ray segment `org + t * dir`, `t` in `[tnear, tfar]` (Embree's layout of
-// the same fields). `dir` need not be normalised. A NaN or zero direction hits nothing.
+// A geometry of the scene: `CORAY_GEOM_TRIANGLES`, `CORAY_GEOM_SPHERES`
+// or `CORAY_GEOM_CONES` (`CORAY_INVALID_ID` in a miss).
+typedef uint32_t CorayGeomId;
+
+// A ray segment `org + t * dir`, `t` in `[tnear, tfar]` (Embree's layout
+// of the same fields). `dir` need not be normalised. A ray with a NaN or
+// infinite component, a zero direction or `tnear > tfar` hits nothing.
 typedef struct CorayRay {
   // Origin.
   float org[3];
@@ -259,47 +255,75 @@ typedef struct CorayRay {
 typedef struct CorayHit {
   // Ray parameter of the hit.
   float t;
-  // Triangle: barycentric weight of vertex 1; cone: position along the axis in [0, 1].
+  // Triangle: barycentric weight of vertex 1; cone: position along the
+  // axis in [0, 1].
   float u;
   // Triangle: barycentric weight of vertex 2.
   float v;
-  // Geometric normal, not normalised.
+  // Geometric normal, not normalised, not flipped towards the ray.
   float ng[3];
-  // `CORAY_GEOM_TRIANGLES`, `_SPHERES`, `_CONES` or `CORAY_INVALID_ID`.
-  uint32_t geom_id;
-  // Index within the geometry, or `CORAY_INVALID_ID`.
+  // The primitive's geometry (`CORAY_GEOM_*`), or `CORAY_INVALID_ID`.
+  CorayGeomId geom_id;
+  // Index within that geometry's array, or `CORAY_INVALID_ID`.
   uint32_t prim_id;
 } CorayHit;
 
-// Work done by one trace call.
-typedef struct CorayTraceStats {
-  // Rays traced.
-  uint64_t rays;
-  // Nodes visited, interior plus leaf (TSPR = this / rays).
-  uint64_t traversal_steps;
-  // Interior nodes visited.
-  uint64_t interior_steps;
-  // Leaves visited.
-  uint64_t leaf_steps;
-  // Empty leaves visited.
-  uint64_t empty_leaf_steps;
-  // Ray-primitive tests.
-  uint64_t prim_tests;
-} CorayTraceStats;
+// A pinhole camera as NFF's `v` block gives it.
+typedef struct CorayCamera {
+  // `sizeof(CorayCamera)`.
+  size_t struct_size;
+  // Eye.
+  float from[3];
+  // Point looked at (not the eye).
+  float at[3];
+  // Up vector (not along the view direction).
+  float up[3];
+  // Field of view in degrees, in (0, 180) (NFF's angle).
+  float angle_deg;
+  // Image width in pixels (1 to 32768).
+  uint32_t width;
+  // Image height in pixels (1 to 32768).
+  uint32_t height;
+} CorayCamera;
 
-// Work done by one hierarchy trace call, in the thesis' terms.
-typedef struct CorayBvhStats {
-  // Rays, nodes visited, primitive tests.
-  struct CorayTraceStats trace;
-  // Hierarchy objects (boxes) tested.
-  uint64_t box_tests;
-  // Their cost in the thesis' units (a box test costs 2 to 51).
-  uint64_t box_cost;
-  // Cost of the actual objects (primitives) tested, in the same units.
-  uint64_t prim_cost;
-} CorayBvhStats;
+// Result of a patch-to-patch visibility query.
+typedef struct CorayPatchResult {
+  // `sizeof(CorayPatchResult)`.
+  size_t struct_size;
+  // Sample segments that meet nothing.
+  uint32_t visible;
+  // Sample segments cast (`samples_per_side^4`).
+  uint32_t samples;
+  // Entries of the HLCTS the segments started from.
+  uint32_t cut_len;
+} CorayPatchResult;
 
-// Parameters of a kd-tree build. Get them from [`coray_kd_params_default`].
+// How an image is cast: one of the `CORAY_CAST_*` schemes.
+typedef uint32_t CorayCastScheme;
+
+// How an image is cast. Get it from `coray_cast_params_default`.
+typedef struct CorayCastParams {
+  // `sizeof(CorayCastParams)`.
+  size_t struct_size;
+  // `CORAY_CAST_*`.
+  CorayCastScheme scheme;
+  // SLCTS window width (at least 2; the paper's 5).
+  uint32_t window_width;
+  // SLCTS-2D window height (at least 2; the paper's 5).
+  uint32_t window_height;
+  // Records kept per traversal history (1 to 2^20): larger shares more,
+  // never changes results.
+  uint32_t history_capacity;
+} CorayCastParams;
+
+// An opened kd-tree: fill it with `coray_kdtree_open`, pass it to every
+// call on that tree. Read-only: many threads may share one.
+typedef struct CorayKdTree {
+  // Opaque to the caller.
+  uint64_t opaque[32];
+} CorayKdTree;
+
+// Parameters of a kd-tree build. Get them from `coray_kdtree_params_default`.
 typedef struct CorayKdParams {
   // `sizeof(CorayKdParams)`.
   size_t struct_size;
@@ -320,22 +344,13 @@ typedef struct CorayKdParams {
   float empty_bonus;
 } CorayKdParams;
 
-// Arena sizes for a kd build, from [`coray_kdtree_requirements`].
-typedef struct CorayKdRequirements {
-  // Smallest tree arena a build accepts (the tree is then one leaf).
-  size_t tree_min_bytes;
-  // Tree arena with room for `refs_per_prim` references per primitive
-  // (4 by default): most scenes build without being cut short; one that
-  // needs more stops splitting evenly and says so (`truncated`).
-  size_t tree_bytes;
-  // Smallest scratch arena a build accepts.
-  size_t scratch_min_bytes;
-  // Scratch arena that goes with `tree_bytes`.
-  size_t scratch_bytes;
-} CorayKdRequirements;
+// A kd-tree build preset: `CORAY_KD_PRESET_AUTO` or `CORAY_KD_PRESET_PAPER`.
+typedef uint32_t CorayKdPreset;
 
-// What a built tree holds (read from its arena header, O(1)).
+// What a built kd-tree holds, from `coray_kdtree_info` (O(1)).
 typedef struct CorayKdTreeInfo {
+  // `sizeof(CorayKdTreeInfo)`.
+  size_t struct_size;
   // Nodes, interior and leaf.
   uint32_t node_count;
   // Leaves.
@@ -344,101 +359,35 @@ typedef struct CorayKdTreeInfo {
   uint32_t ref_count;
   // Depth of the deepest leaf.
   uint32_t depth;
-  // Primitives in the tree (not degenerate).
+  // Primitives in the tree (the scene's, less the degenerate ones).
   uint32_t valid_prim_count;
   // 1 when room ran out and the build stopped splitting early.
   uint32_t truncated;
-  // Bytes of the arena the tree's layout covers.
+  // Bytes of the arena the tree's layout covers (its capacities): what
+  // a copy of the arena must hold. The build wrote all of them.
   size_t arena_bytes_used;
+  // Bytes of traversal stack every trace takes (`CORAY_KDTREE_STACK_BYTES`).
+  size_t stack_bytes;
   // Lower corner of the scene box.
   float bounds_min[3];
   // Upper corner of the scene box.
   float bounds_max[3];
 } CorayKdTreeInfo;
 
-// Figures of a validated tree, from [`coray_kdtree_validate`].
-typedef struct CorayKdTreeStats {
-  // Nodes, interior and leaf.
-  uint32_t node_count;
-  // Leaves.
-  uint32_t leaf_count;
-  // Leaves with no primitive.
-  uint32_t empty_leaf_count;
-  // Primitive references.
-  uint32_t ref_count;
-  // Depth of the deepest leaf.
-  uint32_t depth;
-  // SAH cost with the default constants, relative to the root's area.
-  float sah_cost;
-} CorayKdTreeStats;
+// How a ray walks a kd-tree: `CORAY_TRAVERSAL_HIERARCHICAL` or
+// `CORAY_TRAVERSAL_ROPES` (the same hits).
+typedef uint32_t CorayTraversal;
 
-// How an image is cast. Get it from [`coray_cast_params_default`].
-typedef struct CorayCastParams {
-  // `sizeof(CorayCastParams)`.
-  size_t struct_size;
-  // `CORAY_SCHEME_*`.
-  uint32_t scheme;
-  // SLCTS window width (at least 2; the paper's 5).
-  uint32_t window_width;
-  // SLCTS-2D window height (at least 2; the paper's 5).
-  uint32_t window_height;
-  // Records kept per traversal history (at least 1): larger shares more,
-  // never changes results.
-  uint32_t history_capacity;
-} CorayCastParams;
+// A projection: `CORAY_PLANE_PERSPECTIVE` or `CORAY_PLANE_ORTHOGRAPHIC`.
+typedef uint32_t CorayPlaneKind;
 
-// A pinhole camera as NFF's `v` block gives it.
-typedef struct CorayCamera {
-  // `sizeof(CorayCamera)`.
-  size_t struct_size;
-  // Eye.
-  float from[3];
-  // Point looked at.
-  float at[3];
-  // Up vector.
-  float up[3];
-  // Field of view in degrees (NFF's angle).
-  float angle_deg;
-  // Image width in pixels (1 to 32768).
-  uint32_t width;
-  // Image height in pixels (1 to 32768).
-  uint32_t height;
-} CorayCamera;
-
-// What a cast did.
-typedef struct CorayCastStats {
-  // Work of all rays cast (boundary rays included).
-  struct CorayTraceStats trace;
-  // Shafts (windows, intervals, rectangles) given a common sequence.
-  uint64_t windows;
-  // Of those, shafts whose sequence starts with a shared leaf (gamma = this / windows).
-  uint64_t windows_shared;
-  // Shafts with a termination object.
-  uint64_t windows_terminated;
-  // SLCTS windows without a shared leaf whose rays started below the
-  // root, at their corners' deepest common node.
-  uint64_t windows_entered;
-} CorayCastStats;
-
-// Result of a patch-to-patch visibility query.
-typedef struct CorayPatchResult {
-  // Sample segments that meet nothing.
-  uint32_t visible;
-  // Sample segments cast (`samples_per_side^4`).
-  uint32_t samples;
-  // Entries of the HLCTS the segments started from.
-  uint32_t cut_len;
-  // Work of the vertex-to-vertex segments that built the HLCTS.
-  struct CorayTraceStats boundary;
-  // Work of the sample segments.
-  struct CorayTraceStats trace;
-} CorayPatchResult;
-
-// A projection plane. Get one from [`coray_proj_plane_camera`] or
-// [`coray_proj_light_planes`].
+// A projection plane. Get one from `coray_proj_camera_plane` or
+// `coray_proj_light_planes`.
 typedef struct CorayProjPlane {
-  // `CORAY_PLANE_PERSPECTIVE` or `CORAY_PLANE_ORTHOGRAPHIC`.
-  uint32_t kind;
+  // `sizeof(CorayProjPlane)`.
+  size_t struct_size;
+  // `CORAY_PLANE_*`.
+  CorayPlaneKind kind;
   // Centre of projection (perspective).
   float eye[3];
   // First plane axis.
@@ -449,61 +398,158 @@ typedef struct CorayProjPlane {
   float forward[3];
 } CorayProjPlane;
 
+// A light: `CORAY_LIGHT_POINT` or `CORAY_LIGHT_DIRECTIONAL`.
+typedef uint32_t CorayLightKind;
+
 // A light: a point light at `v`, or a directional light shining along `v`.
 typedef struct CorayLight {
-  // `CORAY_LIGHT_POINT` or `CORAY_LIGHT_DIRECTIONAL`.
-  uint32_t kind;
+  // `sizeof(CorayLight)`.
+  size_t struct_size;
+  // `CORAY_LIGHT_*`.
+  CorayLightKind kind;
   // Position or direction.
   float v[3];
 } CorayLight;
 
-// Parameters of a projection build. Get them from [`coray_proj_params_default`].
+// What a projection hierarchy's structure is built on: `CORAY_PROJ_CRITERIA_*`.
+typedef uint32_t CorayProjCriteria;
+
+// Parameters of a projection build. Get them from `coray_proj_params_default`.
 typedef struct CorayProjParams {
   // `sizeof(CorayProjParams)`.
   size_t struct_size;
-  // `CORAY_PROJ_CRITERIA_2D` or `CORAY_PROJ_CRITERIA_DUMMY`.
-  uint32_t criteria;
+  // `CORAY_PROJ_CRITERIA_*`.
+  CorayProjCriteria criteria;
   // The builder and its settings (`leaf_size` is 1 here; `start_empty`
-  // must be 0).
+  // must be 0); its own `struct_size` is set too.
   struct CorayBvhParams bvh;
 } CorayProjParams;
 
-// Arena sizes for a projection hierarchy, from [`coray_proj_requirements`].
-typedef struct CorayProjRequirements {
-  // The hierarchy's arena.
-  size_t proj_bytes;
-  // Build scratch.
-  size_t scratch_bytes;
-} CorayProjRequirements;
-
-// What a projection hierarchy holds (read from its arena header, O(1)).
+// What a projection hierarchy holds, from `coray_proj_info` (O(1)).
 typedef struct CorayProjInfo {
-  // `CORAY_BVH_*`.
-  uint32_t builder;
+  // `sizeof(CorayProjInfo)`.
+  size_t struct_size;
+  // `CORAY_BVH_BUILDER_*`.
+  CorayBvhBuilder builder;
   // `CORAY_PROJ_CRITERIA_*`.
-  uint32_t criteria;
+  CorayProjCriteria criteria;
   // Nodes in use.
   uint32_t node_count;
   // Primitives in the hierarchy (2D criteria leave out those that
   // project to nothing).
-  uint32_t object_count;
+  uint32_t ref_count;
   // Levels below the root.
   uint32_t depth;
-  // Bytes of traversal stack the trace calls need (4-byte aligned).
-  size_t stack_bytes;
   // Bytes of the arena the layout covers.
   size_t arena_bytes_used;
-  // The plane.
+  // Bytes of traversal stack every trace and validate call needs.
+  size_t stack_bytes;
+  // The plane (its `struct_size` set).
   struct CorayProjPlane plane;
 } CorayProjInfo;
 
-// Work done by one projection trace call.
-typedef struct CorayProjStats {
-  // Rays, nodes, primitives and the thesis' costs (a 2D test costs 4).
-  struct CorayBvhStats bvh;
-  // How many of `bvh.box_tests` were point-in-rectangle tests.
-  uint64_t rect_tests;
-} CorayProjStats;
+// An opened projection hierarchy: fill it with `coray_proj_open`.
+typedef struct CorayProj {
+  // Opaque to the caller.
+  uint64_t opaque[32];
+} CorayProj;
+
+// How a ray is tested against the nodes: `CORAY_PROJ_SCHEME_*`.
+typedef uint32_t CorayProjScheme;
+
+// The scene's triangle mesh.
+#define CORAY_GEOM_TRIANGLES 0
+
+// The scene's spheres.
+#define CORAY_GEOM_SPHERES 1
+
+// The scene's cones and cylinders.
+#define CORAY_GEOM_CONES 2
+
+// Top-down binary splitting, children of most nearly equal surface area (the thesis' TDBS).
+#define CORAY_BVH_BUILDER_TDBS 0
+
+// Top-down binary splitting by the surface area heuristic.
+#define CORAY_BVH_BUILDER_TDBS_SAH 1
+
+// Bottom-up matching: join the pair with the smallest joint box, repeatedly.
+#define CORAY_BVH_BUILDER_NN 2
+
+// Guttman's R-tree (quadratic split); dynamic.
+#define CORAY_BVH_BUILDER_RTREE 3
+
+// The R*-tree; dynamic.
+#define CORAY_BVH_BUILDER_RSTAR 4
+
+// Bottom-up matching by a nearest-neighbour chain: the joins of
+// `CORAY_BVH_BUILDER_NN` (exact ties aside) in sub-quadratic time.
+#define CORAY_BVH_BUILDER_NN_CHAIN 5
+
+// Scene order.
+#define CORAY_BVH_ORDER_SCENE 0
+
+// A shuffled order (`seed`).
+#define CORAY_BVH_ORDER_SHUFFLED 1
+
+// Morton order of the box centres.
+#define CORAY_BVH_ORDER_SORTED 2
+
+// Every pixel by hierarchical traversal (the reference).
+#define CORAY_CAST_HIERARCHICAL 0
+
+// Every pixel by rope traversal.
+#define CORAY_CAST_ROPES 1
+
+// SLCTS on each scanline, windows of `window_width x 1` pixels.
+#define CORAY_CAST_SLCTS_1D 2
+
+// SLCTS in windows of `window_width x window_height` pixels.
+#define CORAY_CAST_SLCTS_2D 3
+
+// HLCTS by bisection of each scanline.
+#define CORAY_CAST_HLCTS_1D 4
+
+// HLCTS by 2D bisection, alternating axes.
+#define CORAY_CAST_HLCTS_2D 5
+
+// SAH-driven termination, depth bound from N. The default.
+#define CORAY_KD_PRESET_AUTO 0
+
+// The LCTS paper's settings: depth 16, leaves of at most 2 objects.
+#define CORAY_KD_PRESET_PAPER 1
+
+// Stack traversal (Havran's TA_B^rec).
+#define CORAY_TRAVERSAL_HIERARCHICAL 0
+
+// Leaf to leaf by ropes.
+#define CORAY_TRAVERSAL_ROPES 1
+
+// The primitives' rectangles on the plane.
+#define CORAY_PROJ_CRITERIA_2D 0
+
+// "Dummy": a 3D structure whose nodes carry their children's rectangles.
+#define CORAY_PROJ_CRITERIA_DUMMY 1
+
+// The ray's point in the node's rectangle (4 comparisons).
+#define CORAY_PROJ_SCHEME_2D 0
+
+// The ray against the node's 3D box.
+#define CORAY_PROJ_SCHEME_3D 1
+
+// The rectangle first, the 3D box when the rectangle holds the point.
+#define CORAY_PROJ_SCHEME_COMBINATION 2
+
+// A central projection.
+#define CORAY_PLANE_PERSPECTIVE 0
+
+// A parallel projection.
+#define CORAY_PLANE_ORTHOGRAPHIC 1
+
+// A point light.
+#define CORAY_LIGHT_POINT 0
+
+// A directional light.
+#define CORAY_LIGHT_DIRECTIONAL 1
 
 #ifdef __cplusplus
 extern "C" {
@@ -513,285 +559,238 @@ extern "C" {
 // values get "unknown status"). Never NULL; never free it.
 const char *coray_status_str(int32_t status);
 
-// Default parameters for `builder` (`CORAY_BVH_*`) with `struct_size`
-// set. An unknown builder gives `struct_size` 0, which every call rejects.
-struct CorayBvhParams coray_bvh_params_default(uint32_t builder);
+// The library's version, `(major << 16) | (minor << 8) | patch`: compare
+// it with the header's `CORAY_VERSION_*` to catch a header and library
+// of different versions.
+uint32_t coray_version(void);
 
-// Arena sizes for a hierarchy over `prim_count` primitives with `params`
-// (for an R-tree, `prim_count` is the most objects it will hold).
+// An empty scene with `struct_size` set.
+struct CorayScene coray_scene_default(void);
+
+// A `CorayRequirements` to fill, `struct_size` set.
+struct CorayRequirements coray_requirements_default(void);
+
+// A `CorayShape` to fill, `struct_size` set.
+struct CorayShape coray_shape_default(void);
+
+// A `CorayTraceStats` to fill, `struct_size` set.
+struct CorayTraceStats coray_trace_stats_default(void);
+
+// Default parameters for `builder` with `struct_size` set; an unknown
+// builder gives `struct_size` 0, which every call refuses.
+struct CorayBvhParams coray_bvh_params_default(CorayBvhBuilder builder);
+
+// A `CorayBvhInfo` to fill, `struct_size` set.
+struct CorayBvhInfo coray_bvh_info_default(void);
+
+// Arena, scratch and stack sizes for a hierarchy over `prim_count`
+// primitives with `params` (for an R-tree, `prim_count` is the most
+// objects it will hold). Static builders need exactly `arena_bytes`.
 //
-// # Safety
-// `params` and `out` are NULL or valid pointers to their types.
+// Safety: `params` and `out` are NULL or valid pointers to their types.
 enum CorayStatus coray_bvh_requirements(size_t prim_count,
                                         const struct CorayBvhParams *params,
-                                        struct CorayBvhRequirements *out);
+                                        struct CorayRequirements *out);
 
-// Builds a hierarchy over `scene` into `bvh_arena`, with `scratch_arena`
-// as scratch (free again when this returns).
+// Builds a hierarchy over `scene` into `arena`, with `scratch` as scratch
+// (free again when this returns).
 //
-// Both arenas are 16-byte aligned and do not overlap. Static builders need
-// `bvh_bytes` from [`coray_bvh_requirements`]; an R-tree takes any arena
-// from the size for the scene's primitive count up, and uses the rest as
-// room for later inserts. On `CORAY_STATUS_ARENA_TOO_SMALL`,
-// `*needed_bytes` (if not NULL) receives the size the arena that was too
-// small needs. Degenerate primitives stay out of the hierarchy (never hit).
+// Both are 16-byte aligned and overlap neither each other nor the scene.
+// Static builders need `arena_bytes` of the requirements; an R-tree takes
+// any arena from the size for the scene's primitive count up and uses the
+// rest as room for later inserts. On `CORAY_STATUS_ARENA_TOO_SMALL`,
+// `*needed_bytes` (if not NULL) receives the size the arena or scratch
+// that was too small needs. Degenerate primitives stay out (never hit).
+// The part of the arena the layout covers is written entirely; bytes past
+// it are not touched.
 //
-// # Safety
-// Every pointer is NULL or valid for its documented size; the arenas are
-// not read or written by anyone else during the call.
+// Safety: every pointer is NULL or valid for its documented size; the
+// arenas are not read or written by anyone else during the call.
 enum CorayStatus coray_bvh_build(const struct CorayScene *scene,
                                  const struct CorayBvhParams *params,
-                                 void *bvh_arena,
-                                 size_t bvh_bytes,
-                                 void *scratch_arena,
+                                 void *arena,
+                                 size_t arena_bytes,
+                                 void *scratch,
                                  size_t scratch_bytes,
                                  size_t *needed_bytes);
 
-// What the hierarchy in `bvh_arena` holds, from its header (O(1)).
+// Opens the hierarchy in `arena` with the scene it was built on: O(1)
+// checks, then `*out` is the handle every trace, info and validate call
+// takes. The arena and the scene's arrays stay in place and unchanged
+// while the handle is used (an R-tree's own inserts and deletes aside).
+// Validate an arena from untrusted storage once, as for a kd-tree.
 //
-// # Safety
-// `bvh_arena` is valid for reads of `bvh_bytes`; `out` is NULL or writable.
-enum CorayStatus coray_bvh_info(const void *bvh_arena, size_t bvh_bytes, struct CorayBvhInfo *out);
+// Safety: `arena` is NULL or readable for `arena_bytes`; `scene` and `out`
+// NULL or valid.
+enum CorayStatus coray_bvh_open(const void *arena,
+                                size_t arena_bytes,
+                                const struct CorayScene *scene,
+                                struct CorayBvh *out);
 
-// Checks every structural invariant of the hierarchy against `scene`
-// (O(size)): boxes are exact unions, indices in range, counts and depth as
-// recorded; for R-trees also the fill rules and free lists. Run it on an
-// arena loaded from untrusted storage before tracing or changing it.
-// `CORAY_STATUS_CORRUPT_ARENA` when anything is wrong; `out` may be NULL.
+// What the hierarchy holds, from its header (O(1)).
 //
-// # Safety
-// As [`coray_bvh_info`]; `scene` is valid.
-enum CorayStatus coray_bvh_validate(const void *bvh_arena,
-                                    size_t bvh_bytes,
-                                    const struct CorayScene *scene,
-                                    struct CorayBvhTreeStats *out);
+// Safety: `bvh` is a handle `coray_bvh_open` filled; `out` NULL or writable.
+enum CorayStatus coray_bvh_info(const struct CorayBvh *bvh, struct CorayBvhInfo *out);
 
-// Inserts primitive `prim_index` (0-based over triangles, then spheres,
-// then cones) into the R-tree in `bvh_arena`. A degenerate primitive is
-// accepted and not stored. `CORAY_STATUS_ARENA_TOO_SMALL` when the arena
-// holds `CorayBvhInfo.capacity` objects: the tree is then unchanged
-// (build again in a larger arena). `CORAY_STATUS_INVALID_PARAMETER` for a
-// static hierarchy or an index past the scene. Inserting an object that the
-// tree holds already stores it twice.
+// Checks every structural invariant of the hierarchy against its scene,
+// in time linear in the hierarchy, never crashing on any bytes: boxes are
+// exact unions, indices in range, counts, depth and reference digest as
+// recorded, and for R-trees the fill rules and free lists.
+// `CORAY_STATUS_CORRUPT_ARENA` when anything is wrong. Once it accepts an
+// arena, every call on it gives the results of a clean build. `stack` is
+// the traversal stack (`stack_bytes` of the info); `out` may be NULL.
 //
-// # Safety
-// `bvh_arena` is valid for reads and writes of `bvh_bytes` bytes that
-// nobody else touches during the call; `scene` is valid.
-enum CorayStatus coray_bvh_insert(void *bvh_arena,
-                                  size_t bvh_bytes,
+// Safety: as `coray_bvh_info`; `stack` writable for `stack_bytes`.
+enum CorayStatus coray_bvh_validate(const struct CorayBvh *bvh,
+                                    void *stack,
+                                    size_t stack_bytes,
+                                    struct CorayShape *out);
+
+// Inserts primitive `prim_id` of geometry `geom_id` into the R-tree in
+// `arena`. A degenerate primitive is accepted and not stored.
+// `CORAY_STATUS_ARENA_TOO_SMALL` when the arena holds
+// `CorayBvhInfo.capacity` objects: the tree is then unchanged (build
+// again in a larger arena). `CORAY_STATUS_INVALID_PARAMETER` for a static
+// hierarchy or a primitive the scene lacks. Inserting an object that the
+// tree holds already stores it twice. On a tree that validates, an insert
+// either completes or changes nothing; on a broken one it may stop with
+// `CORAY_STATUS_CORRUPT_ARENA`. No trace may run on the arena meanwhile.
+//
+// Safety: `arena` is valid for reads and writes of `arena_bytes` bytes
+// that nobody else touches during the call; `scene` is valid.
+enum CorayStatus coray_bvh_insert(void *arena,
+                                  size_t arena_bytes,
                                   const struct CorayScene *scene,
-                                  uint32_t prim_index);
+                                  CorayGeomId geom_id,
+                                  uint32_t prim_id);
 
-// Removes primitive `prim_index` from the R-tree in `bvh_arena`;
-// `*deleted` (if not NULL) receives 1 when it was there, else 0. Nodes left
-// underfull are dissolved and their objects inserted again, which needs
-// `scratch_bytes` from [`coray_bvh_requirements`] in `scratch_arena`
-// (16-byte aligned, not overlapping the tree).
+// Removes primitive `prim_id` of geometry `geom_id` from the R-tree in
+// `arena`; `*deleted` (if not NULL) receives 1 when it was there, else 0.
+// Nodes left underfull are dissolved and their objects inserted again,
+// which needs the requirements' `scratch_bytes` in `scratch` (16-byte
+// aligned, not overlapping the tree). Otherwise as `coray_bvh_insert`.
 //
-// # Safety
-// As [`coray_bvh_insert`]; `scratch_arena` is valid for writes of
+// Safety: as `coray_bvh_insert`; `scratch` is writable for
 // `scratch_bytes`; `deleted` is NULL or writable.
-enum CorayStatus coray_bvh_delete(void *bvh_arena,
-                                  size_t bvh_bytes,
+enum CorayStatus coray_bvh_delete(void *arena,
+                                  size_t arena_bytes,
                                   const struct CorayScene *scene,
-                                  uint32_t prim_index,
-                                  void *scratch_arena,
+                                  CorayGeomId geom_id,
+                                  uint32_t prim_id,
+                                  void *scratch,
                                   size_t scratch_bytes,
                                   uint8_t *deleted);
 
 // Closest hits of `count` rays: `hits[i]` for `rays[i]`. `stack` is the
-// caller's traversal stack of `stack_bytes` (at least
-// `CorayBvhInfo.stack_bytes`, 4-byte aligned; one per thread). `stats` may
-// be NULL. Many threads may trace one hierarchy at once, each with its
-// own stack, while nobody changes it.
+// caller's traversal stack of `stack_bytes` (at least the info's
+// `stack_bytes`, 16-byte aligned; one per thread). `stats` may be NULL.
+// Many threads may trace one hierarchy at once, each with its own stack,
+// while nobody changes it.
 //
-// # Safety
-// `rays` and `hits` hold `count` elements (may be NULL when `count` is 0);
-// the arena and scene as in [`coray_bvh_validate`]; `stack` is writable
-// for `stack_bytes`.
-enum CorayStatus coray_bvh_intersect(const void *bvh_arena,
-                                     size_t bvh_bytes,
-                                     const struct CorayScene *scene,
+// Safety: `bvh` as in `coray_bvh_info`; `rays` and `hits` hold `count`
+// elements (may be NULL when `count` is 0); `stack` is writable for
+// `stack_bytes`; `stats` NULL or writable.
+enum CorayStatus coray_bvh_intersect(const struct CorayBvh *bvh,
                                      const struct CorayRay *rays,
                                      struct CorayHit *hits,
                                      size_t count,
-                                     void *stack_mem,
+                                     void *stack,
                                      size_t stack_bytes,
-                                     struct CorayBvhStats *stats);
+                                     struct CorayTraceStats *stats);
 
-// Any-hit queries (shadow rays): `occluded[i]` is 1 when something lies on
-// `rays[i]` within `[tnear, tfar]`, else 0. Otherwise as [`coray_bvh_intersect`].
+// `coray_bvh_intersect` for one ray.
 //
-// # Safety
-// As [`coray_bvh_intersect`], with `occluded` holding `count` bytes.
-enum CorayStatus coray_bvh_occluded(const void *bvh_arena,
-                                    size_t bvh_bytes,
-                                    const struct CorayScene *scene,
+// Safety: as `coray_bvh_intersect` with `count` 1.
+enum CorayStatus coray_bvh_intersect1(const struct CorayBvh *bvh,
+                                      const struct CorayRay *ray,
+                                      struct CorayHit *hit,
+                                      void *stack,
+                                      size_t stack_bytes,
+                                      struct CorayTraceStats *stats);
+
+// Any-hit queries (shadow rays): `occluded[i]` is 1 when something lies
+// on `rays[i]` within `[tnear, tfar]`, else 0. Otherwise as
+// `coray_bvh_intersect`.
+//
+// Safety: as `coray_bvh_intersect`, with `occluded` holding `count` bytes.
+enum CorayStatus coray_bvh_occluded(const struct CorayBvh *bvh,
                                     const struct CorayRay *rays,
                                     uint8_t *occluded,
                                     size_t count,
-                                    void *stack_mem,
+                                    void *stack,
                                     size_t stack_bytes,
-                                    struct CorayBvhStats *stats);
+                                    struct CorayTraceStats *stats);
 
-// Arena sizes for a tree over `prim_count` primitives with `params`.
+// `coray_bvh_occluded` for one ray.
 //
-// # Safety
-// `params` and `out` are NULL or valid pointers to their types.
-enum CorayStatus coray_kdtree_requirements(size_t prim_count,
-                                           const struct CorayKdParams *params,
-                                           struct CorayKdRequirements *out);
+// Safety: as `coray_bvh_occluded` with `count` 1.
+enum CorayStatus coray_bvh_occluded1(const struct CorayBvh *bvh,
+                                     const struct CorayRay *ray,
+                                     uint8_t *occluded,
+                                     void *stack,
+                                     size_t stack_bytes,
+                                     struct CorayTraceStats *stats);
 
-// Builds an SAH kd-tree over `scene` into `tree_arena`, using
-// `scratch_arena` as scratch (free again when this returns).
-//
-// Both arenas must be 16-byte aligned and must not overlap. Any tree arena
-// from `tree_min_bytes` up works: with less than `tree_bytes` the build stops
-// splitting where room runs out (see `CorayKdTreeInfo.truncated`). On
-// `CORAY_STATUS_ARENA_TOO_SMALL`, `*needed_bytes` (if not NULL) receives the
-// minimum size of the arena that was too small. Bytes of either arena past
-// what its layout uses are never written.
-//
-// The tree stores primitive indices: trace it with the same scene, unchanged.
-// The arena holds no pointer, so it may be copied, saved and loaded to any
-// 16-byte aligned address and traced there.
-//
-// # Safety
-// Every pointer is NULL or valid for its documented size; the arenas are
-// not read or written by anyone else during the call.
-enum CorayStatus coray_kdtree_build(const struct CorayScene *scene,
-                                    const struct CorayKdParams *params,
-                                    void *tree_arena,
-                                    size_t tree_bytes,
-                                    void *scratch_arena,
-                                    size_t scratch_bytes,
-                                    size_t *needed_bytes);
+// A camera at (0, 0, 1) looking at the origin, y up, 45 degrees, 64 x 64
+// pixels, `struct_size` set.
+struct CorayCamera coray_camera_default(void);
 
-// What the tree in `tree_arena` holds, from its header (O(1)).
-//
-// # Safety
-// `tree_arena` is valid for reads of `tree_bytes`; `out` is NULL or writable.
-enum CorayStatus coray_kdtree_info(const void *tree_arena,
-                                   size_t tree_bytes,
-                                   struct CorayKdTreeInfo *out);
-
-// Checks every structural invariant of the tree against `scene` (O(size));
-// run it on an arena loaded from untrusted storage before tracing.
-// `CORAY_STATUS_CORRUPT_ARENA` when anything is wrong.
-//
-// # Safety
-// As [`coray_kdtree_info`]; `scene` is valid.
-enum CorayStatus coray_kdtree_validate(const void *tree_arena,
-                                       size_t tree_bytes,
-                                       const struct CorayScene *scene,
-                                       struct CorayKdTreeStats *out);
-
-// Closest hits of `count` rays: `hits[i]` for `rays[i]`. `traversal` is
-// `CORAY_TRAVERSAL_HIERARCHICAL` or `CORAY_TRAVERSAL_ROPES` (same hits).
-// `stats` may be NULL; otherwise it receives this call's counts.
-// Thread-safe: many threads may trace one tree at once.
-//
-// # Safety
-// `rays` and `hits` hold `count` elements (may be NULL when `count` is 0);
-// the arena and scene as in [`coray_kdtree_validate`].
-enum CorayStatus coray_kdtree_intersect(const void *tree_arena,
-                                        size_t tree_bytes,
-                                        const struct CorayScene *scene,
-                                        uint32_t traversal_method,
-                                        const struct CorayRay *rays,
-                                        struct CorayHit *hits,
-                                        size_t count,
-                                        struct CorayTraceStats *stats);
-
-// [`coray_kdtree_intersect`] for one ray.
-//
-// # Safety
-// As [`coray_kdtree_intersect`] with `count` = 1.
-enum CorayStatus coray_kdtree_intersect1(const void *tree_arena,
-                                         size_t tree_bytes,
-                                         const struct CorayScene *scene,
-                                         uint32_t traversal_method,
-                                         const struct CorayRay *ray,
-                                         struct CorayHit *hit,
-                                         struct CorayTraceStats *stats);
-
-// Any-hit queries (shadow rays) for `count` rays: `occluded[i]` is 1 when
-// something lies on `rays[i]` within `[tnear, tfar]`, else 0.
-//
-// # Safety
-// As [`coray_kdtree_intersect`], with `occluded` holding `count` bytes.
-enum CorayStatus coray_kdtree_occluded(const void *tree_arena,
-                                       size_t tree_bytes,
-                                       const struct CorayScene *scene,
-                                       uint32_t traversal_method,
-                                       const struct CorayRay *rays,
-                                       uint8_t *occluded,
-                                       size_t count,
-                                       struct CorayTraceStats *stats);
-
-// [`coray_kdtree_occluded`] for one ray.
-//
-// # Safety
-// As [`coray_kdtree_occluded`] with `count` = 1.
-enum CorayStatus coray_kdtree_occluded1(const void *tree_arena,
-                                        size_t tree_bytes,
-                                        const struct CorayScene *scene,
-                                        uint32_t traversal_method,
-                                        const struct CorayRay *ray,
-                                        uint8_t *occluded,
-                                        struct CorayTraceStats *stats);
+// A `CorayPatchResult` to fill, `struct_size` set.
+struct CorayPatchResult coray_patch_result_default(void);
 
 // Default cast parameters: SLCTS-2D, 5 x 5 windows, 256 records per history.
 struct CorayCastParams coray_cast_params_default(void);
 
-// Bytes of scratch `coray_kdtree_cast_image` needs for this camera and
-// these parameters (0 for the hierarchical and rope schemes).
+// Scratch and stack bytes `coray_kdtree_cast_image` needs for this camera
+// and these parameters (`scratch_bytes`, with `scratch_min_bytes` the
+// same; the arena fields are 0).
 //
-// # Safety
-// Every pointer is NULL or valid for its type.
-enum CorayStatus coray_cast_requirements(const struct CorayCamera *cam,
-                                         const struct CorayCastParams *params,
-                                         size_t *scratch_bytes);
+// Safety: every pointer is NULL or valid for its type.
+enum CorayStatus coray_kdtree_cast_requirements(const struct CorayCamera *camera_in,
+                                                const struct CorayCastParams *params,
+                                                struct CorayRequirements *out);
 
-// Casts one primary ray per pixel of `cam` through the tree with the
-// scheme of `params`. `t_out[y * width + x]` receives the hit distance
-// (infinity on a miss), `prim_out` the global primitive index (triangles,
-// then spheres, then cones; `CORAY_INVALID_ID` on a miss): every scheme
-// gives exactly what hierarchical traversal gives. `scratch` (16-byte
-// aligned, `coray_cast_requirements` bytes; may be NULL when that is 0) is
-// free again afterwards. `stats` may be NULL.
+// Casts one primary ray per pixel of the camera through the tree with the
+// scheme of `params`: `hits[y * width + x]` receives the closest hit of
+// pixel (x, y), exactly what hierarchical traversal gives (every scheme).
+// `scratch` (16-byte aligned, the requirements' `scratch_bytes`; NULL
+// when that is 0) is free again afterwards; `stack` as for
+// `coray_kdtree_intersect`; `stats` may be NULL.
 //
-// # Safety
-// As `coray_kdtree_intersect`; `t_out` and `prim_out` hold `width * height`
-// elements; the scratch is used by nobody else during the call.
-enum CorayStatus coray_kdtree_cast_image(const void *tree_arena,
-                                         size_t tree_bytes,
-                                         const struct CorayScene *scene,
-                                         const struct CorayCamera *cam,
+// Safety: `tree` as in `coray_kdtree_info`; `hits` holds `width * height`
+// elements; `scratch` and `stack` are writable for their sizes and used
+// by nobody else during the call.
+enum CorayStatus coray_kdtree_cast_image(const struct CorayKdTree *tree,
+                                         const struct CorayCamera *camera_in,
                                          const struct CorayCastParams *params,
                                          void *scratch,
                                          size_t scratch_bytes,
-                                         float *t_out,
-                                         uint32_t *prim_out,
-                                         struct CorayCastStats *stats);
+                                         void *stack,
+                                         size_t stack_bytes,
+                                         struct CorayHit *hits,
+                                         struct CorayTraceStats *stats);
 
-// Scratch bytes of `coray_kdtree_patch_visibility` for histories of up to
-// `history_capacity` records.
-size_t coray_patch_requirements(uint32_t history_capacity);
+// Scratch and stack bytes of `coray_kdtree_patch_visibility` for
+// histories of up to `history_capacity` records (1 to 2^20).
+//
+// Safety: `out` is NULL or writable.
+enum CorayStatus coray_kdtree_patch_requirements(uint32_t history_capacity,
+                                                 struct CorayRequirements *out);
 
 // Visibility between two convex patches (3 or 4 vertices each, `x y z`
-// per vertex): `samples_per_side x samples_per_side` points on each patch,
-// every segment between them trimmed by `eps` of its length at both ends,
-// all started from one HLCTS of the vertex-to-vertex segments. The visible
-// fraction is `visible / samples`; each segment's answer is exactly what
-// hierarchical traversal gives.
+// per vertex): `samples_per_side x samples_per_side` points on each patch
+// (1 to 255), every segment between them trimmed by `eps` (in [0, 0.5))
+// of its length at both ends, all started from one HLCTS of the
+// vertex-to-vertex segments. The visible fraction is `visible / samples`;
+// each segment's answer is exactly what hierarchical traversal gives.
+// `scratch` (16-byte aligned; its size sets the history capacity),
+// `stack` as for `coray_kdtree_intersect`; `stats` (may be NULL) counts
+// every segment, boundary and sample.
 //
-// # Safety
-// As `coray_kdtree_intersect`; `patch_a` and `patch_b` hold `3 * count`
-// floats; `scratch` holds `scratch_bytes` (16-byte aligned); `out` is writable.
-enum CorayStatus coray_kdtree_patch_visibility(const void *tree_arena,
-                                               size_t tree_bytes,
-                                               const struct CorayScene *scene,
+// Safety: `tree` as in `coray_kdtree_info`; `patch_a` and `patch_b` hold
+// `3 * count` floats; `scratch` and `stack` writable for their sizes;
+// `out` writable; `stats` NULL or writable.
+enum CorayStatus coray_kdtree_patch_visibility(const struct CorayKdTree *tree,
                                                const float *patch_a,
                                                uint32_t count_a,
                                                const float *patch_b,
@@ -800,132 +799,288 @@ enum CorayStatus coray_kdtree_patch_visibility(const void *tree_arena,
                                                float eps,
                                                void *scratch,
                                                size_t scratch_bytes,
-                                               struct CorayPatchResult *out);
+                                               void *stack,
+                                               size_t stack_bytes,
+                                               struct CorayPatchResult *out,
+                                               struct CorayTraceStats *stats);
 
-// The image plane of `camera`.
+// The parameters of `preset` with `struct_size` set; an unknown preset
+// gives `struct_size` 0, which every call refuses.
+struct CorayKdParams coray_kdtree_params_default(CorayKdPreset preset);
+
+// A `CorayKdTreeInfo` to fill, `struct_size` set.
+struct CorayKdTreeInfo coray_kdtree_info_default(void);
+
+// Arena, scratch and stack sizes for a tree over `prim_count` primitives.
 //
-// # Safety
-// `camera` and `out` are NULL or valid pointers to their types.
-enum CorayStatus coray_proj_plane_camera(const struct CorayCamera *camera_in,
+// Safety: `params` and `out` are NULL or valid pointers to their types.
+enum CorayStatus coray_kdtree_requirements(size_t prim_count,
+                                           const struct CorayKdParams *params,
+                                           struct CorayRequirements *out);
+
+// Builds an SAH kd-tree over `scene` into `arena`, using `scratch` (free
+// again when this returns).
+//
+// Both are 16-byte aligned and must not overlap each other or the scene.
+// Any arena from `arena_min_bytes` up works: with less than `arena_bytes`
+// the build stops splitting where room runs out (`truncated` in the info).
+// On `CORAY_STATUS_ARENA_TOO_SMALL`, `*needed_bytes` (if not NULL)
+// receives the minimum size of the arena or scratch that was too small.
+// The part of the arena the tree's layout covers is written entirely (no
+// byte of the caller's is left in it: two builds of one scene with one
+// set of parameters give the same bytes); bytes past it are not touched.
+//
+// The tree stores primitive indices: trace it with the same scene,
+// unchanged. The arena holds no pointer, so it may be copied, saved and
+// loaded at any 16-byte aligned address and opened there.
+//
+// Safety: every pointer is NULL or valid for its documented size; the
+// arenas are not read or written by anyone else during the call.
+enum CorayStatus coray_kdtree_build(const struct CorayScene *scene,
+                                    const struct CorayKdParams *params,
+                                    void *arena,
+                                    size_t arena_bytes,
+                                    void *scratch,
+                                    size_t scratch_bytes,
+                                    size_t *needed_bytes);
+
+// Opens the kd-tree in `arena` (as `coray_kdtree_build` wrote it, or a
+// copy of it) with the scene it was built on: O(1) checks of the header,
+// the layout and the scene's counts, then `*out` is the handle every other
+// call takes. The arena and the scene's arrays must stay in place and
+// unchanged while the handle is used. Run `coray_kdtree_validate` once on
+// an arena from untrusted storage: until it accepts it, calls on the
+// handle never crash or hang, but may fail with
+// `CORAY_STATUS_CORRUPT_ARENA` and leave outputs partly written.
+//
+// Safety: `arena` is NULL or readable for `arena_bytes`; `scene` and `out`
+// NULL or valid.
+enum CorayStatus coray_kdtree_open(const void *arena,
+                                   size_t arena_bytes,
+                                   const struct CorayScene *scene,
+                                   struct CorayKdTree *out);
+
+// What the tree holds, from its header (O(1)).
+//
+// Safety: `tree` is a handle `coray_kdtree_open` filled (see there); `out`
+// NULL or writable.
+enum CorayStatus coray_kdtree_info(const struct CorayKdTree *tree, struct CorayKdTreeInfo *out);
+
+// Checks every structural invariant of the tree against its scene, in
+// time linear in the tree, never crashing on any bytes:
+// `CORAY_STATUS_CORRUPT_ARENA` when anything is wrong. Once it accepts an
+// arena, every call on it gives the results of a clean build. `stack` is
+// unused by kd-trees (it may be NULL); `out` may be NULL.
+//
+// Safety: as `coray_kdtree_info`.
+enum CorayStatus coray_kdtree_validate(const struct CorayKdTree *tree,
+                                       void *stack,
+                                       size_t stack_bytes,
+                                       struct CorayShape *out);
+
+// Closest hits of `count` rays: `hits[i]` for `rays[i]`, by `traversal`.
+// `stack` is `CORAY_KDTREE_STACK_BYTES` of traversal stack (16-byte
+// aligned; one per thread). `stats` may be NULL. Many threads may trace
+// one tree at once, each with its own stack.
+//
+// Safety: `tree` as in `coray_kdtree_info`; `rays` and `hits` hold `count`
+// elements (may be NULL when `count` is 0); `stack` is writable for
+// `stack_bytes`; `stats` is NULL or writable.
+enum CorayStatus coray_kdtree_intersect(const struct CorayKdTree *tree,
+                                        CorayTraversal traversal,
+                                        const struct CorayRay *rays,
+                                        struct CorayHit *hits,
+                                        size_t count,
+                                        void *stack,
+                                        size_t stack_bytes,
+                                        struct CorayTraceStats *stats);
+
+// `coray_kdtree_intersect` for one ray.
+//
+// Safety: as `coray_kdtree_intersect` with `count` 1.
+enum CorayStatus coray_kdtree_intersect1(const struct CorayKdTree *tree,
+                                         CorayTraversal traversal,
+                                         const struct CorayRay *ray,
+                                         struct CorayHit *hit,
+                                         void *stack,
+                                         size_t stack_bytes,
+                                         struct CorayTraceStats *stats);
+
+// Any-hit queries (shadow rays) of `count` rays: `occluded[i]` is 1 when
+// something lies on `rays[i]` within `[tnear, tfar]`, else 0. Otherwise
+// as `coray_kdtree_intersect`.
+//
+// Safety: as `coray_kdtree_intersect`, with `occluded` holding `count` bytes.
+enum CorayStatus coray_kdtree_occluded(const struct CorayKdTree *tree,
+                                       CorayTraversal traversal,
+                                       const struct CorayRay *rays,
+                                       uint8_t *occluded,
+                                       size_t count,
+                                       void *stack,
+                                       size_t stack_bytes,
+                                       struct CorayTraceStats *stats);
+
+// `coray_kdtree_occluded` for one ray.
+//
+// Safety: as `coray_kdtree_occluded` with `count` 1.
+enum CorayStatus coray_kdtree_occluded1(const struct CorayKdTree *tree,
+                                        CorayTraversal traversal,
+                                        const struct CorayRay *ray,
+                                        uint8_t *occluded,
+                                        void *stack,
+                                        size_t stack_bytes,
+                                        struct CorayTraceStats *stats);
+
+// The image plane of `camera` (a camera as `coray_kdtree_cast_image` takes it).
+//
+// Safety: `camera` and `out` are NULL or valid pointers to their types.
+enum CorayStatus coray_proj_camera_plane(const struct CorayCamera *camera_in,
                                          struct CorayProjPlane *out);
 
 // The planes of `light` for a scene inside `[bounds_min, bounds_max]`:
 // `*count` is 6 (a cube: the point light lies inside the box; face `k`
 // looks along +x, -x, +y, -y, +z, -z) or 1 (a point light outside it, a
-// directional light). `planes` holds 6 entries.
+// directional light). `planes` holds 6 entries, each with `struct_size` set.
 //
-// # Safety
-// `light`, `bounds_min`, `bounds_max` are NULL or readable; `planes`
-// (6 entries) and `count` NULL or writable.
+// Safety: `light`, `bounds_min`, `bounds_max` are NULL or readable;
+// `planes` (6 entries) and `count` NULL or writable.
 enum CorayStatus coray_proj_light_planes(const struct CorayLight *light,
                                          const float (*bounds_min)[3],
                                          const float (*bounds_max)[3],
                                          struct CorayProjPlane *planes,
                                          uint32_t *count);
 
-// Which of `light`'s planes (from [`coray_proj_light_planes`] with the
-// same bounds) the shadow ray `ray` uses; `CORAY_STATUS_INVALID_PARAMETER`
-// when the ray does not run towards the light (ending at it or before).
+// Which of `light`'s planes (from `coray_proj_light_planes` with the same
+// bounds) the shadow ray `ray` uses; `CORAY_STATUS_INVALID_PARAMETER` when
+// the ray does not run towards the light (ending at it or before).
 //
-// # Safety
-// Pointers NULL or valid for their types.
+// Safety: pointers NULL or valid for their types.
 enum CorayStatus coray_proj_light_plane_for(const struct CorayLight *light,
                                             const float (*bounds_min)[3],
                                             const float (*bounds_max)[3],
                                             const struct CorayRay *ray,
                                             uint32_t *plane_index);
 
-// Default parameters: `criteria` (`CORAY_PROJ_CRITERIA_*`) with `builder`
-// (`CORAY_BVH_*`) and its defaults. Unknown values give `struct_size` 0.
-struct CorayProjParams coray_proj_params_default(uint32_t criteria, uint32_t builder);
+// Default parameters: `criteria` with `builder` and its defaults; unknown
+// values give `struct_size` 0, which every call refuses.
+struct CorayProjParams coray_proj_params_default(CorayProjCriteria criteria,
+                                                 CorayBvhBuilder builder);
 
-// Arena sizes for a projection hierarchy over `prim_count` primitives.
+// A `CorayProjInfo` to fill, `struct_size` set.
+struct CorayProjInfo coray_proj_info_default(void);
+
+// A `CorayProjPlane` to fill or set, `struct_size` set (the rest zero).
+struct CorayProjPlane coray_proj_plane_default(void);
+
+// A point light at the origin, `struct_size` set.
+struct CorayLight coray_light_default(void);
+
+// Arena, scratch and stack sizes for a projection hierarchy over
+// `prim_count` primitives (the arena exactly).
 //
-// # Safety
-// `params` and `out` are NULL or valid pointers to their types.
+// Safety: `params` and `out` are NULL or valid pointers to their types.
 enum CorayStatus coray_proj_requirements(size_t prim_count,
                                          const struct CorayProjParams *params,
-                                         struct CorayProjRequirements *out);
+                                         struct CorayRequirements *out);
 
-// Builds the projection hierarchy of `scene` on `plane` into
-// `proj_arena` (exactly `proj_bytes` from [`coray_proj_requirements`] or
-// more), with `scratch_arena` as scratch. Arenas 16-byte aligned, not
-// overlapping; `CORAY_STATUS_ARENA_TOO_SMALL` reports the bytes needed.
+// Builds the projection hierarchy of `scene` on `plane` into `arena`
+// (`arena_bytes` of the requirements, or more), with `scratch` as scratch.
+// Both 16-byte aligned, overlapping neither each other nor the scene;
+// `CORAY_STATUS_ARENA_TOO_SMALL` reports the bytes needed. The part of
+// the arena the layout covers is written entirely.
 //
-// # Safety
-// Every pointer is NULL or valid for its documented size; the arenas are
-// not touched by anyone else during the call.
+// Safety: every pointer is NULL or valid for its documented size; the
+// arenas are not touched by anyone else during the call.
 enum CorayStatus coray_proj_build(const struct CorayScene *scene,
                                   const struct CorayProjParams *params,
                                   const struct CorayProjPlane *plane,
-                                  void *proj_arena,
-                                  size_t proj_bytes,
-                                  void *scratch_arena,
+                                  void *arena,
+                                  size_t arena_bytes,
+                                  void *scratch,
                                   size_t scratch_bytes,
                                   size_t *needed_bytes);
 
-// What the hierarchy in `proj_arena` holds (O(1)).
+// Opens the projection hierarchy in `arena` with the scene it was built
+// on: O(1) checks, then `*out` is the handle every other call takes. The
+// arena and the scene's arrays stay in place and unchanged while the
+// handle is used. Validate an arena from untrusted storage once.
 //
-// # Safety
-// `proj_arena` is valid for reads of `proj_bytes`; `out` NULL or writable.
-enum CorayStatus coray_proj_info(const void *proj_arena,
-                                 size_t proj_bytes,
-                                 struct CorayProjInfo *out);
+// Safety: `arena` is NULL or readable for `arena_bytes`; `scene` and
+// `out` NULL or valid.
+enum CorayStatus coray_proj_open(const void *arena,
+                                 size_t arena_bytes,
+                                 const struct CorayScene *scene,
+                                 struct CorayProj *out);
 
-// Checks the hierarchy against `scene` (O(size)): the 3D side as
-// [`crate::coray_bvh_validate`] does, every rectangle the union of its
-// entries', every primitive's the projection of its box.
+// What the hierarchy holds (O(1)).
 //
-// # Safety
-// As [`coray_proj_info`]; `scene` is valid.
-enum CorayStatus coray_proj_validate(const void *proj_arena,
-                                     size_t proj_bytes,
-                                     const struct CorayScene *scene);
+// Safety: `proj` is a handle `coray_proj_open` filled; `out` NULL or writable.
+enum CorayStatus coray_proj_info(const struct CorayProj *proj, struct CorayProjInfo *out);
 
-// Closest hits of `count` rays by `scheme_id` (`CORAY_PROJ_SCHEME_*`).
-// Every ray must lie on a line through the plane's eye: a camera ray that
-// starts at the eye, or a ray towards the eye that ends at it or before
-// (for an orthographic plane: against its direction). Otherwise nothing is
-// written and the status is `CORAY_STATUS_INVALID_PARAMETER`: trace such
-// rays through a 3D hierarchy. `stack` as for [`crate::coray_bvh_intersect`].
+// Checks the hierarchy against its scene in linear time, never crashing:
+// the 3D side as `coray_bvh_validate` does (an R-tree's fill rule aside:
+// its m is not kept), every rectangle the union of its entries', every
+// primitive's the projection of its box. `stack` as for the trace calls;
+// `out` may be NULL.
 //
-// # Safety
-// As [`crate::coray_bvh_intersect`].
-enum CorayStatus coray_proj_intersect(const void *proj_arena,
-                                      size_t proj_bytes,
-                                      const struct CorayScene *scene,
-                                      uint32_t scheme_id,
+// Safety: as `coray_proj_info`; `stack` writable for `stack_bytes`.
+enum CorayStatus coray_proj_validate(const struct CorayProj *proj,
+                                     void *stack,
+                                     size_t stack_bytes,
+                                     struct CorayShape *out);
+
+// Closest hits of `count` rays by `scheme`. Every ray must lie on a line
+// through the plane's eye: a camera ray that starts at the eye, or a ray
+// towards the eye that ends at it or before (for an orthographic plane:
+// against its direction). Otherwise nothing is written and the status is
+// `CORAY_STATUS_INVALID_PARAMETER`: trace such rays through a 3D
+// hierarchy. `stack` and `stats` as for `coray_bvh_intersect`.
+//
+// Safety: as `coray_bvh_intersect`, with `proj` a handle `coray_proj_open` filled.
+enum CorayStatus coray_proj_intersect(const struct CorayProj *proj,
+                                      CorayProjScheme scheme,
                                       const struct CorayRay *rays,
                                       struct CorayHit *hits,
                                       size_t count,
-                                      void *stack_mem,
+                                      void *stack,
                                       size_t stack_bytes,
-                                      struct CorayProjStats *stats);
+                                      struct CorayTraceStats *stats);
+
+// `coray_proj_intersect` for one ray.
+//
+// Safety: as `coray_proj_intersect` with `count` 1.
+enum CorayStatus coray_proj_intersect1(const struct CorayProj *proj,
+                                       CorayProjScheme scheme,
+                                       const struct CorayRay *ray,
+                                       struct CorayHit *hit,
+                                       void *stack,
+                                       size_t stack_bytes,
+                                       struct CorayTraceStats *stats);
 
 // Any-hit queries (shadow rays towards the plane's light), as
-// [`coray_proj_intersect`]: `occluded[i]` is 1 when something lies on
+// `coray_proj_intersect`: `occluded[i]` is 1 when something lies on
 // `rays[i]` within `[tnear, tfar]`.
 //
-// # Safety
-// As [`coray_proj_intersect`], with `occluded` holding `count` bytes.
-enum CorayStatus coray_proj_occluded(const void *proj_arena,
-                                     size_t proj_bytes,
-                                     const struct CorayScene *scene,
-                                     uint32_t scheme_id,
+// Safety: as `coray_proj_intersect`, with `occluded` holding `count` bytes.
+enum CorayStatus coray_proj_occluded(const struct CorayProj *proj,
+                                     CorayProjScheme scheme,
                                      const struct CorayRay *rays,
                                      uint8_t *occluded,
                                      size_t count,
-                                     void *stack_mem,
+                                     void *stack,
                                      size_t stack_bytes,
-                                     struct CorayProjStats *stats);
+                                     struct CorayTraceStats *stats);
 
-// An empty scene with `struct_size` set.
-struct CorayScene coray_scene_default(void);
-
-// Default kd parameters of a preset (`CORAY_KD_PRESET_AUTO` or
-// `CORAY_KD_PRESET_PAPER`) with `struct_size` set. An unknown preset gives
-// the auto preset with `struct_size` 0, which every build rejects.
-struct CorayKdParams coray_kd_params_default(uint32_t preset);
+// `coray_proj_occluded` for one ray.
+//
+// Safety: as `coray_proj_occluded` with `count` 1.
+enum CorayStatus coray_proj_occluded1(const struct CorayProj *proj,
+                                      CorayProjScheme scheme,
+                                      const struct CorayRay *ray,
+                                      uint8_t *occluded,
+                                      void *stack,
+                                      size_t stack_bytes,
+                                      struct CorayTraceStats *stats);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -1,8 +1,12 @@
-//! Counters that every traversal fills, named as in the reports (DESIGN.md).
+//! The one counter type every traversal of every structure fills, named as
+//! in the reports (docs/design.md, "Metrics").
 
-/// Work done by one trace call (one ray or an array of rays).
+/// Work done by one trace call (one ray or an array of rays), for any
+/// structure. Fields a structure has no use for stay 0.
 ///
-/// `traversal_steps` is the TSPR numerator: nodes visited, interior and leaf.
+/// `traversal_steps` is the TSPR numerator: nodes visited, interior and
+/// leaf. The thesis' cost units (Bezerianos 2001, 4.1: add, multiply,
+/// compare 1, divide 5, square root 15) are counted by the hierarchies.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[repr(C)]
 pub struct TraceStats {
@@ -18,16 +22,54 @@ pub struct TraceStats {
     pub empty_leaf_steps: u64,
     /// Ray-primitive intersection tests.
     pub prim_tests: u64,
+    /// Hierarchies: hierarchy objects (3D boxes and 2D rectangles) tested.
+    pub box_tests: u64,
+    /// Hierarchies: their cost in the thesis' units.
+    pub box_cost: u64,
+    /// Hierarchies: cost of the primitives tested, in the thesis' units.
+    pub prim_cost: u64,
+    /// Projection hierarchies: point-in-rectangle tests among `box_tests`.
+    pub rect_tests: u64,
+    /// Rays whose traversal stopped at a broken invariant of the structure
+    /// (an index out of range, a cycle, a stack too short for the tree).
+    /// Always 0 on a structure that `validate` accepted; the C ABI turns
+    /// any other count into `CORAY_STATUS_CORRUPT_ARENA`.
+    pub faults: u64,
 }
 
 impl TraceStats {
     /// Adds another call's counts to these.
-    pub fn add(&mut self, other: &TraceStats) {
-        self.rays += other.rays;
-        self.traversal_steps += other.traversal_steps;
-        self.interior_steps += other.interior_steps;
-        self.leaf_steps += other.leaf_steps;
-        self.empty_leaf_steps += other.empty_leaf_steps;
-        self.prim_tests += other.prim_tests;
+    pub fn add(&mut self, o: &TraceStats) {
+        self.rays += o.rays;
+        self.traversal_steps += o.traversal_steps;
+        self.interior_steps += o.interior_steps;
+        self.leaf_steps += o.leaf_steps;
+        self.empty_leaf_steps += o.empty_leaf_steps;
+        self.prim_tests += o.prim_tests;
+        self.box_tests += o.box_tests;
+        self.box_cost += o.box_cost;
+        self.prim_cost += o.prim_cost;
+        self.rect_tests += o.rect_tests;
+        self.faults += o.faults;
+    }
+
+    /// Traversal steps per ray (TSPR).
+    pub fn tspr(&self) -> f64 {
+        self.traversal_steps as f64 / self.rays.max(1) as f64
+    }
+
+    /// Primitive tests per ray.
+    pub fn tests_per_ray(&self) -> f64 {
+        self.prim_tests as f64 / self.rays.max(1) as f64
+    }
+
+    /// The thesis' average cost per hierarchy object.
+    pub fn cost_per_box(&self) -> f64 {
+        self.box_cost as f64 / self.box_tests.max(1) as f64
+    }
+
+    /// The thesis' average cost per actual object (primitive).
+    pub fn cost_per_prim(&self) -> f64 {
+        self.prim_cost as f64 / self.prim_tests.max(1) as f64
     }
 }

@@ -4,9 +4,10 @@ mod common;
 
 use common::*;
 use coray::bvh::{
-    self, rtree_requirements, Builder, Bvh, BvhNode, BvhScratch, BvhStackItem, BvhStats,
-    BvhStorage, InsertOrder, RTree, RTreeParams, Split,
+    self, rtree_requirements, Builder, Bvh, BvhNode, BvhScratch, BvhStackItem, BvhStorage,
+    InsertOrder, RTree, RTreeParams, Split,
 };
+use coray::TraceStats;
 use coray::{oracle, Aabb, Error, Hit, Ray, Scene};
 
 /// Storage for a static build, sized by `requirements` minus `less` nodes.
@@ -57,7 +58,7 @@ fn check(bvh: &Bvh, rays: &[Ray], what: &str, want: impl Fn(&Ray) -> (Hit, bool)
     let mut hits = 0;
     for (i, r) in rays.iter().enumerate() {
         let (w, w_any) = want(r);
-        let mut st = BvhStats::default();
+        let mut st = TraceStats::default();
         let got = bvh.intersect(r, &mut stack, &mut st);
         assert!(
             same(&got, &w),
@@ -68,8 +69,8 @@ fn check(bvh: &Bvh, rays: &[Ray], what: &str, want: impl Fn(&Ray) -> (Hit, bool)
             w_any,
             "{what}: ray {i} occluded"
         );
-        assert_eq!(st.trace.rays, 2);
-        if bvh.info.ref_count > 0 {
+        assert_eq!(st.rays, 2);
+        if bvh.info().ref_count > 0 {
             assert!(st.box_tests >= 2 && st.box_cost >= 2 * st.box_tests);
         }
         hits += w.is_hit() as usize;
@@ -148,10 +149,12 @@ fn every_builder_matches_the_oracle() {
     for b in STATIC {
         let mut s = Static::new(n, b, 0);
         let bvh = s.build(&scene, b).unwrap();
-        let v = bvh.validate(None).unwrap();
+        let v = bvh
+            .validate(None, &mut vec![BvhStackItem::default(); bvh.stack_len()])
+            .unwrap();
         assert_eq!(v.refs as usize, n, "{b:?}");
         assert_eq!(v.leaves as usize, n, "{b:?}: one object per leaf");
-        assert_eq!(bvh.info.node_count as usize, 2 * n - 1, "{b:?}");
+        assert_eq!(bvh.info().node_count as usize, 2 * n - 1, "{b:?}");
         let hits = check(&bvh, &rays, &format!("{b:?}"), oracle_of(&scene));
         assert!(hits > 300, "{b:?}: {hits} hits");
     }
@@ -159,9 +162,11 @@ fn every_builder_matches_the_oracle() {
         let (mut nodes, mut refs) = (Vec::new(), Vec::new());
         let t = build_rtree(&scene, p, &mut nodes, &mut refs);
         assert_eq!(t.len() as usize, n);
-        let v = t.validate().unwrap();
+        let v = t
+            .validate(&mut vec![BvhStackItem::default(); t.bvh().stack_len()])
+            .unwrap();
         assert_eq!(v.refs as usize, n, "{name}");
-        assert_eq!(v.nodes, t.bvh().info.node_count, "{name}");
+        assert_eq!(v.nodes, t.bvh().info().node_count, "{name}");
         let bvh = t.bvh();
         check(&bvh, &rays, &name, oracle_of(&scene));
     }
@@ -177,8 +182,9 @@ fn empty_single_and_degenerate_scenes() {
     for b in STATIC {
         let mut s = Static::new(scene.prim_count(), b, 0);
         let bvh = s.build(&scene, b).unwrap();
-        assert_eq!(bvh.info.ref_count, 0);
-        bvh.validate(None).unwrap();
+        assert_eq!(bvh.info().ref_count, 0);
+        bvh.validate(None, &mut vec![BvhStackItem::default(); bvh.stack_len()])
+            .unwrap();
         check(&bvh, &rays, "degenerate", oracle_of(&scene));
     }
     o.add_triangle(
@@ -190,7 +196,7 @@ fn empty_single_and_degenerate_scenes() {
     for b in STATIC {
         let mut s = Static::new(scene.prim_count(), b, 0);
         let bvh = s.build(&scene, b).unwrap();
-        assert_eq!((bvh.info.ref_count, bvh.info.depth), (1, 0));
+        assert_eq!((bvh.info().ref_count, bvh.info().depth), (1, 0));
         check(&bvh, &rays, "single", oracle_of(&scene));
     }
     for (name, p) in rtree_params() {
@@ -204,7 +210,7 @@ fn empty_single_and_degenerate_scenes() {
 /// The interior boxes of a hierarchy, sorted: two builds made the same
 /// joins exactly when these agree.
 fn joins(bvh: &Bvh) -> Vec<[u32; 6]> {
-    let mut v: Vec<[u32; 6]> = bvh.nodes[..bvh.info.node_count as usize]
+    let mut v: Vec<[u32; 6]> = bvh.parts().0[..bvh.info().node_count as usize]
         .iter()
         .filter(|n| !n.is_leaf())
         .map(|n| {
@@ -232,9 +238,10 @@ fn nn_chain_makes_the_quadratic_joins() {
             a.build(&scene, Builder::Nn).unwrap(),
             b.build(&scene, Builder::NnChain).unwrap(),
         );
-        qb.validate(None).unwrap();
+        qb.validate(None, &mut vec![BvhStackItem::default(); qb.stack_len()])
+            .unwrap();
         assert_eq!(joins(&qa), joins(&qb), "n = {n}");
-        assert_eq!(qa.info.depth, qb.info.depth, "n = {n}");
+        assert_eq!(qa.info().depth, qb.info().depth, "n = {n}");
     }
     use coray_scenes::spd::{generate, Options};
     let m = coray_scenes::SceneMesh::from_nff(
@@ -276,7 +283,8 @@ fn forced_reinsertion_changes_the_tree() {
         };
         let (mut nodes, mut refs) = (Vec::new(), Vec::new());
         let t = build_rtree(&scene, p, &mut nodes, &mut refs);
-        t.validate().unwrap();
+        t.validate(&mut vec![BvhStackItem::default(); t.bvh().stack_len()])
+            .unwrap();
         check(&t.bvh(), &rays, "reinsert", oracle_of(&scene));
         built.push(joins(&t.bvh()));
     }
@@ -304,7 +312,7 @@ fn ties_go_to_the_lowest_index() {
         let mut stack = vec![BvhStackItem::default(); bvh.stack_len()];
         for r in &rays {
             let want = oracle::intersect(&scene, r);
-            let got = bvh.intersect(r, &mut stack, &mut BvhStats::default());
+            let got = bvh.intersect(r, &mut stack, &mut TraceStats::default());
             assert_eq!((got.prim_id, got.t), (want.prim_id, want.t), "{b:?} {r:?}");
             hits += got.is_hit() as usize;
         }
@@ -324,13 +332,13 @@ fn exact_fit_and_one_less() {
             let need = bvh::requirements(n, b).nodes;
             let mut s = Static::new(n, b, 0);
             let bvh = s.build(&scene, b).unwrap();
-            assert_eq!(bvh.info.node_count as usize, need, "{b:?} n={n}");
+            assert_eq!(bvh.info().node_count as usize, need, "{b:?} n={n}");
             let mut s = Static::new(n, b, 1);
             match s.build(&scene, b) {
                 Err(Error::SliceTooSmall { slice, needed, got }) => {
                     assert_eq!((slice, needed, got), ("nodes", need, need - 1));
                 }
-                other => panic!("{b:?} n={n}: {:?}", other.map(|t| t.info)),
+                other => panic!("{b:?} n={n}: {:?}", other.map(|t| *t.info())),
             }
         }
     }
@@ -366,7 +374,8 @@ fn rtree_insert_into_a_full_arena() {
             "{p:?}: full after {inserted} of the 100 it was sized for"
         );
         assert_eq!(t.len(), inserted);
-        t.validate().unwrap();
+        t.validate(&mut vec![BvhStackItem::default(); t.bvh().stack_len()])
+            .unwrap();
         let bvh = t.bvh();
         // It holds exactly the first `inserted` triangles.
         let rays = random_rays(&mut rng, 400, 5.0);
@@ -416,8 +425,10 @@ fn rtree_delete_and_reinsert() {
             }
             let left = gone.iter().filter(|g| !**g).count() as u32;
             assert_eq!(t.len(), left);
-            let v = t.validate().unwrap();
-            assert_eq!(v.nodes, t.bvh().info.node_count);
+            let v = t
+                .validate(&mut vec![BvhStackItem::default(); t.bvh().stack_len()])
+                .unwrap();
+            assert_eq!(v.nodes, t.bvh().info().node_count);
             let bvh = t.bvh();
             check(&bvh, &rays, &format!("{p:?} round {round}"), |r| {
                 brute(&scene, r, |q| !gone[q as usize])
@@ -428,7 +439,8 @@ fn rtree_delete_and_reinsert() {
             t.delete(q, &mut orphans).unwrap();
         }
         assert!(t.is_empty());
-        t.validate().unwrap();
+        t.validate(&mut vec![BvhStackItem::default(); t.bvh().stack_len()])
+            .unwrap();
         for q in 0..n {
             t.insert(q).unwrap();
         }
@@ -437,7 +449,8 @@ fn rtree_delete_and_reinsert() {
         let state = t.state();
         // (`t` is not used again: its borrow of the slices ends here.)
         let mut t = RTree::resume(&scene, p, &mut nodes, &mut refs, state).unwrap();
-        t.validate().unwrap();
+        t.validate(&mut vec![BvhStackItem::default(); t.bvh().stack_len()])
+            .unwrap();
         t.delete(0, &mut orphans).unwrap();
         check(&t.bvh(), &rays, "resumed", |r| brute(&scene, r, |q| q != 0));
         // A corrupt free list is caught by validate, a bad state by resume.
@@ -445,7 +458,9 @@ fn rtree_delete_and_reinsert() {
         bad.free_node_blocks += 1;
         let state = t.state();
         assert!(RTree::resume(&scene, p, &mut nodes, &mut refs, bad)
-            .map(|t| t.validate().is_err())
+            .map(|t| t
+                .validate(&mut vec![BvhStackItem::default(); t.bvh().stack_len()])
+                .is_err())
             .unwrap_or(true));
         bad = state;
         bad.node_blocks = u32::MAX / 64;

@@ -19,7 +19,7 @@ fn same(a: &Hit, b: &Hit) -> bool {
 /// Compares every method of `tree` with the oracle on `rays`; returns the
 /// number of hits seen (so callers can assert the test was not vacuous).
 fn check_all(tree: &KdTree, rays: &[Ray], what: &str) -> usize {
-    let scene = tree.scene;
+    let scene = *tree.scene();
     let mut hits = 0;
     for (i, ray) in rays.iter().enumerate() {
         let want = oracle::intersect(&scene, ray);
@@ -27,12 +27,12 @@ fn check_all(tree: &KdTree, rays: &[Ray], what: &str) -> usize {
         hits += want.is_hit() as usize;
         for m in METHODS {
             let mut st = TraceStats::default();
-            let got = tree.intersect(ray, m, &mut st);
+            let got = tree.intersect(ray, m, &mut kst(), &mut st);
             assert!(
                 same(&got, &want),
                 "{what}: ray {i} {ray:?} {m:?}: got {got:?}, oracle {want:?}"
             );
-            let any = tree.occluded(ray, m, &mut st);
+            let any = tree.occluded(ray, m, &mut kst(), &mut st);
             assert_eq!(any, want_any, "{what}: ray {i} {ray:?} {m:?} occluded");
             assert_eq!(st.rays, 2);
             assert_eq!(st.traversal_steps, st.interior_steps + st.leaf_steps);
@@ -138,7 +138,7 @@ fn coincident_primitives() {
         for ray in &rays {
             let want = oracle::intersect(&scene, ray);
             for m in METHODS {
-                let got = tree.intersect(ray, m, &mut TraceStats::default());
+                let got = tree.intersect(ray, m, &mut kst(), &mut TraceStats::default());
                 assert_eq!(
                     (got.geom_id, got.prim_id),
                     (want.geom_id, want.prim_id),
@@ -220,8 +220,8 @@ fn invalid_rays_hit_nothing() {
     for r in &rays {
         for m in METHODS {
             let mut st = TraceStats::default();
-            assert!(!tree.intersect(r, m, &mut st).is_hit());
-            assert!(!tree.occluded(r, m, &mut st));
+            assert!(!tree.intersect(r, m, &mut kst(), &mut st).is_hit());
+            assert!(!tree.occluded(r, m, &mut kst(), &mut st));
         }
     }
 }
@@ -284,11 +284,12 @@ fn degenerate_primitives_are_never_hit() {
     for (name, params) in PRESETS {
         let (req, mut b) = ideal_storage(&scene, &params);
         let tree = build_with(&scene, &params, &req, &mut b);
-        assert_eq!(tree.info.valid_prim_count, 1, "{name}");
+        assert_eq!(tree.info().valid_prim_count, 1, "{name}");
         check_all(&tree, &rays, name);
         let h = tree.intersect(
             rays.last().unwrap(),
             Traversal::Hierarchical,
+            &mut kst(),
             &mut TraceStats::default(),
         );
         assert_eq!((h.geom_id, h.prim_id, h.t), (1, 3, 7.0));
@@ -310,10 +311,10 @@ fn exact_fit_and_one_less() {
         let min = kd::min_requirements(n);
         let (mut b, _, _) = storage_for(&min);
         let tree = build_with(&scene, &params, &min, &mut b);
-        assert_eq!(tree.info.node_count, 1);
+        assert_eq!(tree.info().node_count, 1);
         if n > params.leaf_size as usize {
             assert!(
-                tree.info.truncated(),
+                tree.info().truncated(),
                 "n={n}: minimum room must stop at the root and say so"
             );
         }
@@ -332,21 +333,8 @@ fn exact_fit_and_one_less() {
                 continue;
             }
             *slot -= 1;
-            let (mut b, mut ev, mut fl) = storage_for(&less);
-            let r = kd::build_sah(
-                &scene,
-                &params,
-                kd::KdStorage {
-                    nodes: &mut b.nodes,
-                    leaves: &mut b.leaves,
-                    ropes: &mut b.ropes,
-                    refs: &mut b.refs,
-                },
-                kd::KdScratch {
-                    events: &mut ev,
-                    prim_flags: &mut fl,
-                },
-            );
+            let (mut b, _, _) = storage_for(&less);
+            let r = b.build(&scene, &params);
             match r {
                 Err(coray::Error::SliceTooSmall { needed, got, .. }) => assert_eq!(needed, got + 1),
                 other => panic!("n={n} field {field}: expected SliceTooSmall, got {other:?}"),
@@ -379,8 +367,8 @@ fn paper_preset_respects_its_limits() {
     let params = KdParams::paper();
     let (req, mut b) = ideal_storage(&scene, &params);
     let tree = build_with(&scene, &params, &req, &mut b);
-    assert!(!tree.info.truncated());
-    assert!(tree.info.depth <= 16);
+    assert!(!tree.info().truncated());
+    assert!(tree.info().depth <= 16);
     let st = tree.validate().unwrap();
     assert!(
         st.leaves > 1000,
@@ -492,10 +480,10 @@ fn hit_just_outside_the_scene_box_past_a_split() {
         let (req, mut b) = ideal_storage(&scene, &params);
         let tree = build_with(&scene, &params, &req, &mut b);
         for m in METHODS {
-            let got = tree.intersect(&ray, m, &mut TraceStats::default());
+            let got = tree.intersect(&ray, m, &mut kst(), &mut TraceStats::default());
             assert!(same(&got, &want), "{name} {m:?}: {got:?}, oracle {want:?}");
             assert!(
-                tree.occluded(&ray, m, &mut TraceStats::default()),
+                tree.occluded(&ray, m, &mut kst(), &mut TraceStats::default()),
                 "{name} {m:?}"
             );
         }

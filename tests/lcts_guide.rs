@@ -30,7 +30,7 @@ fn history(tree: &KdTree, ray: &Ray) -> (Vec<HistoryRecord>, Hit, TraceStats) {
     let mut buf = vec![HistoryRecord::default(); 4096];
     let mut h = History::new(&mut buf);
     let mut st = TraceStats::default();
-    trace_recorded(tree, ray, &mut h, &mut st);
+    trace_recorded(tree, ray, &mut h, &mut kst(), &mut st);
     assert!(!h.overflow);
     let (len, hit) = (h.len, h.hit);
     buf.truncate(len);
@@ -43,7 +43,7 @@ fn guided(tree: &KdTree, ray: &Ray, guides: &[&[HistoryRecord]]) -> (Hit, TraceS
     let mut buf = vec![0u32; 4096];
     let paths = Paths::build(&hs, &[FROM_START; MAX_GUIDES], &mut buf);
     let mut st = TraceStats::default();
-    let hit = slcts::trace(tree, &no_sequence(), &paths, 0, ray, &mut st);
+    let hit = slcts::trace(tree, &no_sequence(), &paths, 0, ray, &mut kst(), &mut st);
     (hit, st)
 }
 
@@ -92,7 +92,12 @@ fn wrong_paths_change_steps_not_hits() {
     let recs: Vec<_> = rays.iter().map(|r| history(&tree, r).0).collect();
     let mut interior = 0;
     for (i, ray) in rays.iter().enumerate() {
-        let want = tree.intersect(ray, Traversal::Hierarchical, &mut TraceStats::default());
+        let want = tree.intersect(
+            ray,
+            Traversal::Hierarchical,
+            &mut kst(),
+            &mut TraceStats::default(),
+        );
         // Paths of unrelated rays: most guesses fail, some succeed by chance.
         let others: Vec<&[HistoryRecord]> = (1..=4)
             .map(|k| recs[(i + 97 * k) % rays.len()].as_slice())
@@ -138,7 +143,7 @@ fn neighbouring_pixels_guide_each_other() {
 fn locate(tree: &KdTree, p: coray::Vec3, d: coray::Vec3) -> Option<u32> {
     let mut node = 0usize;
     loop {
-        let nd = tree.nodes[node];
+        let nd = tree.parts().0[node];
         if nd.is_leaf() {
             return Some(nd.index());
         }
@@ -164,10 +169,10 @@ fn a_leaf_holds_a_point_where_point_location_puts_it() {
     let params = KdParams::paper();
     let (req, mut b) = ideal_storage(&scene, &params);
     let tree = build_with(&scene, &params, &req, &mut b);
-    let root = tree.info.bounds();
+    let root = tree.info().bounds();
     let (mut on_faces, mut in_plane) = (0, 0);
     for _ in 0..2000 {
-        let leaf = &tree.ropes[rng.below(tree.ropes.len())];
+        let leaf = &tree.parts().2[rng.below(tree.parts().2.len())];
         let bx = leaf.bounds();
         let mut p = bx.min + (bx.max - bx.min) * rng.vec(0.0, 1.0);
         let mut d = rng.unit();
@@ -186,7 +191,7 @@ fn a_leaf_holds_a_point_where_point_location_puts_it() {
         on_faces += snapped as usize;
         let want = locate(&tree, p, d);
         in_plane += want.is_none() as usize;
-        for (i, rp) in tree.ropes.iter().enumerate() {
+        for (i, rp) in tree.parts().2.iter().enumerate() {
             assert_eq!(
                 holds(rp, p, d),
                 want == Some(i as u32),
@@ -216,7 +221,7 @@ fn a_boundary_ray_that_ended_early_guides_nothing() {
         let hs = [Some(rec.as_slice())];
         let none = Paths::build(&hs, &[NO_PATH], &mut buf);
         let mut st = TraceStats::default();
-        let g = slcts::trace(&tree, &no_sequence(), &none, 0, &ray, &mut st);
+        let g = slcts::trace(&tree, &no_sequence(), &none, 0, &ray, &mut kst(), &mut st);
         assert!(same(&g, &hit));
         // Unguided and without an entry node: redone hierarchically.
         assert_eq!(st.traversal_steps, hier.traversal_steps, "{ray:?}");

@@ -5,9 +5,7 @@ mod common;
 use common::*;
 use coray::kd::KdParams;
 use coray::lcts::hlcts::HlctsEntry;
-use coray::lcts::{
-    cast_image, image_requirements, CornerInfo, HistoryRecord, ImageScratch, Scheme,
-};
+use coray::lcts::{cast_image, image_requirements, HistoryRecord, Scheme};
 use coray_scenes::spd::{self, Options};
 use coray_scenes::SceneMesh;
 
@@ -20,35 +18,9 @@ const SCHEMES: [Scheme; 6] = [
     Scheme::Hlcts2d,
 ];
 
-struct Buffers {
-    records: Vec<HistoryRecord>,
-    entries: Vec<u32>,
-    corners: Vec<CornerInfo>,
-    starts: Vec<u32>,
-    hlcts: Vec<HlctsEntry>,
-}
-
-impl Buffers {
-    fn new(cam: &coray::Camera, scheme: Scheme, cap: usize) -> Buffers {
-        let req = image_requirements(cam.width, cam.height, scheme, cap);
-        Buffers {
-            records: vec![HistoryRecord::default(); req.records],
-            entries: vec![0u32; req.entries],
-            corners: vec![CornerInfo::default(); req.corners],
-            starts: vec![0u32; req.starts],
-            hlcts: vec![HlctsEntry::default(); req.hlcts],
-        }
-    }
-
-    fn scratch(&mut self) -> ImageScratch<'_> {
-        ImageScratch {
-            records: &mut self.records,
-            entries: &mut self.entries,
-            corners: &mut self.corners,
-            starts: &mut self.starts,
-            hlcts: &mut self.hlcts,
-        }
-    }
+/// A cast's scratch for `scheme` over `cam` with histories of `cap` records.
+fn buffers(cam: &coray::Camera, scheme: Scheme, cap: usize) -> coray::owned::OwnedCast {
+    coray::owned::OwnedCast::new(&image_requirements(cam.width, cam.height, scheme, cap))
 }
 
 fn cast(
@@ -57,10 +29,12 @@ fn cast(
     scheme: Scheme,
     cap: usize,
 ) -> (Vec<f32>, Vec<u32>, coray::lcts::CastStats) {
-    let mut b = Buffers::new(cam, scheme, cap);
+    let mut b = buffers(cam, scheme, cap);
     let n = (cam.width * cam.height) as usize;
-    let (mut t, mut p) = (vec![0.0f32; n], vec![0u32; n]);
-    let st = cast_image(tree, cam, scheme, b.scratch(), &mut t, &mut p).unwrap();
+    let mut hits = vec![coray::Hit::MISS; n];
+    let st = cast_image(tree, cam, scheme, b.scratch(), &mut hits).unwrap();
+    let t = hits.iter().map(|h| h.t).collect();
+    let p = hits.iter().map(|h| global_prim(tree.scene(), h)).collect();
     (t, p, st)
 }
 
@@ -137,7 +111,7 @@ fn locate_path(tree: &coray::kd::KdTree, p: coray::Vec3, d: coray::Vec3) -> Vec<
     let mut path = vec![0u32];
     let mut node = 0u32;
     loop {
-        let nd = tree.nodes[node as usize];
+        let nd = tree.parts().0[node as usize];
         if nd.is_leaf() {
             return path;
         }
@@ -165,7 +139,7 @@ fn entry_node_is_where_the_corners_descents_part() {
     let tree = build_with(&scene, &params, &req, &mut b);
     let (f, r, u) = cam.basis();
     let ray = |x: u32, y: u32| cam.ray_in(f, r, u, x as f32 + 0.5, y as f32 + 0.5);
-    let root = tree.info.trace_bounds();
+    let root = tree.info().trace_bounds();
     let mut rng = Rng(7);
     let (mut below_root, mut checked_points) = (0, 0);
     for wy in (0..252).step_by(4) {
@@ -179,6 +153,7 @@ fn entry_node_is_where_the_corners_descents_part() {
                     &tree,
                     &ray(corners[j].0, corners[j].1),
                     &mut h,
+                    &mut kst(),
                     &mut Default::default(),
                 );
                 assert!(!h.overflow);
@@ -211,7 +186,7 @@ fn entry_node_is_where_the_corners_descents_part() {
                 );
                 next.push(descent.get(at.unwrap() + 1).copied());
             }
-            if !tree.nodes[e.node as usize].is_leaf() {
+            if !tree.parts().0[e.node as usize].is_leaf() {
                 assert!(
                     next.iter().any(|n| *n != next[0]),
                     "window {wx},{wy}: not the deepest"
@@ -268,15 +243,25 @@ fn every_cut_entry_a_ray_tests_is_a_step() {
     for (x, y) in (0..20).flat_map(|i| (0..20).map(move |j| (i as f32 / 20.0, j as f32 / 20.0))) {
         let ray = cam.ray_in(f, r, u, x * cam.width as f32, y * cam.height as f32);
         let mut hier = TraceStats::default();
-        let hit = tree.intersect(&ray, coray::kd::Traversal::Hierarchical, &mut hier);
+        let hit = tree.intersect(
+            &ray,
+            coray::kd::Traversal::Hierarchical,
+            &mut kst(),
+            &mut hier,
+        );
         if !hit.is_hit() {
             continue;
         }
         // A leaf the ray misses, then the root: the ray tests the leaf's
         // box (one step), then walks the whole tree as hierarchical traversal.
-        let missed = (0..tree.nodes.len())
-            .filter(|&n| tree.nodes[n].is_leaf())
-            .map(|n| (n, tree.ropes[tree.nodes[n].index() as usize].bounds()))
+        let missed = (0..tree.parts().0.len())
+            .filter(|&n| tree.parts().0[n].is_leaf())
+            .map(|n| {
+                (
+                    n,
+                    tree.parts().2[tree.parts().0[n].index() as usize].bounds(),
+                )
+            })
             .find(|(_, bx)| {
                 bx.clip_ray(ray.origin, ray.dir.recip(), ray.t_min, ray.t_max)
                     .is_none()
@@ -297,7 +282,7 @@ fn every_cut_entry_a_ray_tests_is_a_step() {
             termination: None,
         };
         let mut st = TraceStats::default();
-        let h = hlcts::trace(&tree, &cut, &ray, None, &mut st);
+        let h = hlcts::trace(&tree, &cut, &ray, None, &mut kst(), &mut st);
         assert_eq!((h.prim_id, h.t), (hit.prim_id, hit.t));
         assert_eq!(
             st.traversal_steps,

@@ -50,6 +50,7 @@ fn visible_fraction_equals_brute_force() {
                     records: &mut records,
                     hlcts: &mut hl,
                     paths: &mut paths,
+                    stack: &mut kst(),
                 },
             )
             .unwrap();
@@ -62,7 +63,12 @@ fn visible_fraction_equals_brute_force() {
                 for ib in 0..n * n {
                     let q = patch_point(&bq, step(ib % n), step(ib / n));
                     visible += !tree
-                        .intersect(&segment(p, q, 1e-4), Traversal::Hierarchical, &mut st)
+                        .intersect(
+                            &segment(p, q, 1e-4),
+                            Traversal::Hierarchical,
+                            &mut kst(),
+                            &mut st,
+                        )
                         .is_hit() as u32;
                 }
             }

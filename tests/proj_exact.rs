@@ -10,7 +10,7 @@ use coray::kd::{KdParams, Traversal};
 use coray::proj::lights::{Light, LightPlanes};
 use coray::proj::{
     build_proj, proj_requirements, Criteria, ProjBuilder, ProjHierarchy, ProjPlane, ProjScheme,
-    ProjScratch, ProjStats, ProjStorage, Rect,
+    ProjScratch, ProjStorage, Rect,
 };
 use coray::{Aabb, Hit, Ray, Scene, TraceStats};
 use coray_scenes::spd::{self, Options};
@@ -72,7 +72,8 @@ fn build<'a>(
         ProjBuilder::RTree(p) => Some(p.min_children),
         _ => None,
     };
-    h.validate(min).unwrap();
+    h.validate(min, &mut vec![BvhStackItem::default(); h.stack_len()])
+        .unwrap();
     h
 }
 
@@ -147,7 +148,7 @@ fn primary_rays_match_3d_traversal_on_the_spd_scenes() {
         let mut ts = TraceStats::default();
         let want: Vec<Hit> = rays
             .iter()
-            .map(|r| kd.intersect(r, Traversal::Hierarchical, &mut ts))
+            .map(|r| kd.intersect(r, Traversal::Hierarchical, &mut kst(), &mut ts))
             .collect();
         assert!(want.iter().filter(|h| h.is_hit()).count() > 100, "{name}");
         let plane = ProjPlane::camera(&cam);
@@ -155,9 +156,9 @@ fn primary_rays_match_3d_traversal_on_the_spd_scenes() {
             for c in [Criteria::TwoD, Criteria::Dummy] {
                 let mut o = owned();
                 let h = build(&scene, plane, b, c, &mut o);
-                let mut stack = vec![BvhStackItem::default(); h.bvh.stack_len()];
+                let mut stack = vec![BvhStackItem::default(); h.stack_len()];
                 for s in SCHEMES {
-                    let mut st = ProjStats::default();
+                    let mut st = TraceStats::default();
                     let bad = rays
                         .iter()
                         .zip(&want)
@@ -188,7 +189,7 @@ fn shadow_rays_match_3d_traversal_through_the_light_planes() {
         let (_, rays) = primary(&m, 40);
         let (req, mut b) = ideal_storage(&scene, &KdParams::auto());
         let kd = build_with(&scene, &KdParams::auto(), &req, &mut b);
-        let bounds = kd.info.bounds();
+        let bounds = kd.info().bounds();
         let centre = 0.5 * (bounds.min + bounds.max);
         let mut lights: Vec<Light> = m.lights.iter().map(|(p, _)| Light::Point(*p)).collect();
         lights.push(Light::Point(centre + 0.1 * (bounds.max - centre)));
@@ -196,7 +197,12 @@ fn shadow_rays_match_3d_traversal_through_the_light_planes() {
         let mut ts = TraceStats::default();
         let hits: Vec<(Ray, Hit)> = rays
             .iter()
-            .map(|r| (*r, kd.intersect(r, Traversal::Hierarchical, &mut ts)))
+            .map(|r| {
+                (
+                    *r,
+                    kd.intersect(r, Traversal::Hierarchical, &mut kst(), &mut ts),
+                )
+            })
             .filter(|(_, h)| h.is_hit())
             .collect();
         // (light index, shadow ray, 3D answer)
@@ -212,7 +218,11 @@ fn shadow_rays_match_3d_traversal_through_the_light_planes() {
                     Light::Directional(dir) => (-dir.normalize(), f32::INFINITY),
                 };
                 let s = Ray::new(p, d, 1e-3 * len.clamp(1.0, 1e3), len);
-                shadow.push((li, s, kd.occluded(&s, Traversal::Hierarchical, &mut ts)));
+                shadow.push((
+                    li,
+                    s,
+                    kd.occluded(&s, Traversal::Hierarchical, &mut kst(), &mut ts),
+                ));
             }
         }
         let blocked = shadow.iter().filter(|s| s.2).count();
@@ -253,15 +263,10 @@ fn shadow_rays_match_3d_traversal_through_the_light_planes() {
                         .collect()
                 })
                 .collect();
-            let depth = hier
-                .iter()
-                .flatten()
-                .map(|h| h.bvh.stack_len())
-                .max()
-                .unwrap();
+            let depth = hier.iter().flatten().map(|h| h.stack_len()).max().unwrap();
             let mut stack = vec![BvhStackItem::default(); depth];
             for s in SCHEMES {
-                let mut st = ProjStats::default();
+                let mut st = TraceStats::default();
                 for (li, ray, want) in &shadow {
                     // Known origin: the ray's own light.
                     let face = planes[*li]
@@ -322,8 +327,8 @@ fn rays_from_the_eye_and_boxes_behind_it() {
         for c in [Criteria::TwoD, Criteria::Dummy] {
             let mut ow = owned();
             let h = build(&scene, plane, b, c, &mut ow);
-            let mut stack = vec![BvhStackItem::default(); h.bvh.stack_len()];
-            let mut st = ProjStats::default();
+            let mut stack = vec![BvhStackItem::default(); h.stack_len()];
+            let mut st = TraceStats::default();
             for r in &off_eye {
                 assert!(h
                     .intersect(r, ProjScheme::TwoD, &mut stack, &mut st)

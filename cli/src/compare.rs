@@ -1,15 +1,19 @@
-//! `coray compare`: primary and shadow rays through coray and Embree in one
-//! process, ray by ray, with the cross-check's tie rules; a diff image.
+//! `coray compare`: primary and shadow rays through coray's kd-tree and
+//! Embree in one process, ray by ray, judged by the one tie rule the
+//! benchmark uses too ([`crate::bench::row::judge`]); a diff image.
 
-use crate::bench::{lit_shadow_rays, primary_rays};
-use crate::kdbuild::OwnedKd;
+use crate::bench::row::{self, Verdicts};
+use crate::built::Built;
+use crate::method::{EmbreeCall, Method, Preset};
 use crate::scene::SceneData;
-use coray::kd::{KdParams, Traversal};
-use coray::TraceStats;
-use coray_embree::{classify, Agreement, EmbreeScene};
+use coray::kd::Traversal;
+use coray::tolerance::Agreement;
 
+/// What the comparison found.
 pub struct Outcome {
+    /// Rays that disagree beyond the tie rules.
     pub mismatches: usize,
+    /// Rays compared.
     pub rays: usize,
 }
 
@@ -18,97 +22,83 @@ pub struct Outcome {
 /// shadow ray from that pixel).
 pub fn compare(
     s: &SceneData,
-    params: &KdParams,
+    preset: Preset,
+    threads: usize,
     diff: &std::path::Path,
 ) -> Result<Outcome, String> {
-    let owned = OwnedKd::build(&s.mesh.scene(), params)?;
-    let tree = owned.tree(s.mesh.scene());
-    let embree = EmbreeScene::new(&s.mesh.scene(), None);
-    let primary = primary_rays(s);
-    let mut st = TraceStats::default();
-    let mine: Vec<_> = primary
-        .iter()
-        .map(|r| tree.intersect(r, Traversal::Hierarchical, &mut st))
-        .collect();
-    let theirs: Vec<_> = primary.iter().map(|r| embree.intersect(r)).collect();
-    let (w, h) = (s.mesh.camera.width as usize, s.mesh.camera.height as usize);
-    let mut image = vec![0u8; w * h * 3];
+    let embree = Built::new(Method::Embree(EmbreeCall::One), &s.mesh, preset, threads)?;
+    let ours = Built::new(
+        Method::kd(Traversal::Hierarchical),
+        &s.mesh,
+        preset,
+        threads,
+    )?;
+    let tree = ours
+        .kd()
+        .expect("a kd method")
+        .tree(s.mesh.scene())
+        .map_err(|e| e.to_string())?;
+    let w = row::workload(&s.mesh, &tree);
+    let theirs = row::run_rays(&embree, &w, &tree, 1, threads);
+    let v: Verdicts = row::judge(&embree, &w, &tree, &theirs.hits, &theirs.occluded);
+    let (wd, ht) = (s.mesh.camera.width as usize, s.mesh.camera.height as usize);
+    let mut image = vec![0u8; wd * ht * 3];
     let paint = |img: &mut [u8], px: usize, c: [u8; 3]| img[3 * px..3 * px + 3].copy_from_slice(&c);
-    let (mut mismatches, mut ties, mut max_dt) = (0usize, 0usize, 0.0f32);
-    for (i, r) in primary.iter().enumerate() {
-        let (a, b) = (&mine[i], &theirs[i]);
-        if a.is_hit() && b.is_hit() && (a.geom_id, a.prim_id) == (b.geom_id, b.prim_id) {
-            max_dt = max_dt.max((a.t - b.t).abs());
-        }
-        match classify(r, a, b) {
-            Agreement::Same => {}
+    let mut max_dt = 0.0f32;
+    let (mut primary_mismatches, mut shown) = (0, 0);
+    for (i, a) in v.primary.iter().enumerate() {
+        let (mine, their) = (&w.hits[i], &theirs.hits[i]);
+        match a {
+            Agreement::Same => {
+                if mine.is_hit() {
+                    max_dt = max_dt.max((mine.t - their.t).abs());
+                }
+            }
             Agreement::TieSameDistance | Agreement::TieGrazing => {
-                ties += 1;
-                paint(&mut image, i, [255, 220, 0]);
+                paint(&mut image, i, [255, 220, 0])
             }
             Agreement::Mismatch => {
-                mismatches += 1;
+                primary_mismatches += 1;
                 paint(&mut image, i, [255, 0, 0]);
-                if mismatches <= 10 {
+                if shown < 10 {
+                    shown += 1;
                     println!(
-                        "primary ray at pixel ({}, {}): coray {a:?}, Embree {b:?}",
-                        i % w,
-                        i / w
+                        "primary ray at pixel ({}, {}): coray {mine:?}, Embree {their:?}",
+                        i % wd,
+                        i / wd
                     );
                 }
             }
         }
     }
-    // Shadow rays from the points both agree on, one per light.
-    let shadow: Vec<_> = lit_shadow_rays(s, &mine)
-        .into_iter()
-        .map(|(_, r)| r)
-        .collect();
-    let mut owner = Vec::with_capacity(shadow.len());
-    for (i, hit) in mine.iter().enumerate() {
-        if hit.is_hit() {
-            for _ in &s.mesh.lights {
-                owner.push(i);
-            }
-        }
-    }
     let mut shadow_mismatches = 0;
-    for (k, r) in shadow.iter().enumerate() {
-        let a = tree.occluded(r, Traversal::Hierarchical, &mut st);
-        if a != embree.occluded(r) {
-            // Judge by the closest hits: a tie there explains the difference.
-            let (ca, cb) = (
-                tree.intersect(r, Traversal::Hierarchical, &mut st),
-                embree.intersect(r),
-            );
-            match classify(r, &ca, &cb) {
-                Agreement::Mismatch | Agreement::Same => {
-                    shadow_mismatches += 1;
-                    if shadow_mismatches <= 10 {
-                        println!("shadow ray {r:?}: coray occluded {a}, closest {ca:?}; Embree closest {cb:?}");
-                    }
-                    paint(&mut image, owner.get(k).copied().unwrap_or(0), [0, 80, 255]);
-                }
-                _ => ties += 1,
+    for (k, a) in v.shadow.iter().enumerate() {
+        if *a == Agreement::Mismatch {
+            shadow_mismatches += 1;
+            paint(&mut image, w.shadow.from[k], [0, 80, 255]);
+            if shown < 10 {
+                shown += 1;
+                println!(
+                    "shadow ray {:?}: coray occluded {}, Embree {}",
+                    w.shadow.rays[k], w.occluded[k], theirs.occluded[k]
+                );
             }
         }
     }
-    let rays = primary.len() + shadow.len();
-    let total = mismatches + shadow_mismatches;
+    let (mismatches, ties) = v.counts();
+    let rays = w.primary.len() + w.shadow.rays.len();
     println!(
-        "{}: {} objects, {}x{} primary and {} shadow rays",
+        "{}: {} objects, {wd}x{ht} primary and {} shadow rays",
         s.name,
         s.mesh.counts.objects(),
-        w,
-        h,
-        shadow.len()
+        w.shadow.rays.len()
     );
-    println!("mismatches: {total} of {rays} rays ({mismatches} primary, {shadow_mismatches} shadow); {ties} documented ties");
+    println!(
+        "mismatches: {mismatches} of {rays} rays ({primary_mismatches} primary, \
+         {shadow_mismatches} shadow); {ties} documented ties (coray::tolerance)"
+    );
     println!("largest |dt| on agreeing hits: {max_dt:e}");
-    crate::render::write_png(diff, w as u32, h as u32, &image)?;
+    crate::render::write_image(diff, wd as u32, ht as u32, &image)?;
     println!("diff image: {}", diff.display());
-    Ok(Outcome {
-        mismatches: total,
-        rays,
-    })
+    Ok(Outcome { mismatches, rays })
 }

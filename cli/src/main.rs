@@ -1,77 +1,84 @@
-//! `coray`: render, benchmark and inspect scenes.
+//! `coray`: render, benchmark, compare and inspect scenes.
 //!
 //! With no arguments it runs the main job: `coray render` of the built-in
 //! default scene (spd:balls) to coray.png.
 
 mod bench;
-mod bvhbuild;
-#[cfg(feature = "embree")]
+mod budget;
+mod built;
 mod compare;
-mod kdbuild;
+mod lcts_table;
+mod method;
 mod plot;
-mod proj_series;
-mod projbuild;
+mod projrig;
 mod render;
 mod scene;
 mod series;
+mod shoot;
 mod stats;
-mod tables;
 
+use bench::Settings;
 use clap::{Parser, Subcommand};
 use coray::kd::Traversal;
 use coray_scenes::spd::Options;
+use method::{Method, Preset};
+use scene::SceneData;
 use std::path::PathBuf;
 
 #[derive(Parser)]
 #[command(
     name = "coray",
     version,
-    about = "Allocation-free ray shooting: render, benchmark and inspect scenes"
+    about = "Allocation-free ray shooting: render, benchmark, compare and inspect scenes",
+    after_help = "With no command: `coray render spd:balls -o coray.png`."
 )]
 struct Cli {
-    /// Cut SPD floors into K x K polygons (thesis 6.3.6).
+    /// Cut SPD floors into K x K polygons (thesis 6.3.6), 1 to 1024.
     #[arg(long, global = true, default_value_t = 1, value_name = "K")]
     floor_split: u32,
     #[command(subcommand)]
     command: Option<Command>,
 }
 
+/// Threads and repeats a command accepts at most.
+const MAX_THREADS: usize = 1024;
+const MAX_REPEAT: usize = 1000;
+
 #[derive(Subcommand)]
 enum Command {
-    /// Whitted ray tracing to a PNG: primary, shadow, reflection and refraction rays.
+    /// Whitted ray tracing to an image: primary, shadow, reflection and refraction rays.
     Render {
         /// Scene: an NFF file, `spd:NAME[:SIZE]` or `random[:N]`.
         #[arg(default_value = "spd:balls")]
         scene: String,
-        /// Output PNG.
+        /// Output image; the format comes from the extension (.png or .ppm).
         #[arg(short, long, default_value = "coray.png")]
         output: PathBuf,
-        /// Resolution WxH (default: the scene's).
+        /// Resolution WxH or N (default: the scene's).
         #[arg(long)]
         res: Option<String>,
-        /// Structure and traversal: kd, kd-rope, kd-paper, kd-paper-rope, or a
-        /// hierarchy: tdbs, tdbs-sah, nn, nn-chain, rtree, rstar, rstar-reinsert,
-        /// or projection hierarchies proj-BUILDER-CRITERIA-SCHEME (BUILDER
-        /// tdbs|nn-chain|rtree|rstar, CRITERIA 2d|dummy, SCHEME 2d|3d|comb).
+        /// The method rays are traced with (`coray bench --help` lists them all).
         #[arg(long, default_value = "kd")]
         accel: String,
-        /// Reflection and refraction depth.
+        /// kd-tree preset of `kd` and `kd-rope`: auto or paper.
+        #[arg(long, default_value = "auto")]
+        preset: String,
+        /// Reflection and refraction depth (0 to 64).
         #[arg(long, default_value_t = 5)]
         depth: u32,
         /// Threads (default: all cores).
         #[arg(long)]
         threads: Option<usize>,
     },
-    /// Every method on the same primary and shadow rays, one thread; a table or JSON.
+    /// Methods side by side on the same rays in one run; a table with a legend, or JSON.
     Bench {
         /// Scene: an NFF file, `spd:NAME[:SIZE]` or `random[:N]` (100,000 triangles, 10,000 spheres).
         #[arg(default_value = "random")]
         scene: String,
         /// Resolution N (N x N primary rays).
         #[arg(long, default_value_t = 1024)]
-        res: u32,
-        /// Comma-separated methods (default: every method of this build);
-        /// `slcts1d:N` and `slcts2d:NxM` cast with other windows than the paper's.
+        res: u64,
+        /// Comma-separated methods (default: every method of this build). See the list below.
         #[arg(long, value_delimiter = ',')]
         methods: Option<Vec<String>>,
         /// kd-tree preset: `auto` (SAH termination) or `paper` (depth 16, 2 per leaf).
@@ -80,19 +87,13 @@ enum Command {
         /// Timed runs per method; the best one counts.
         #[arg(long, default_value_t = 3)]
         repeat: usize,
+        /// Threads tracing (default 1: the tables' per-ray figures are single-threaded).
+        #[arg(long, default_value_t = 1)]
+        threads: usize,
         /// Print one JSON object instead of a table.
         #[arg(long)]
         json: bool,
-        /// A paper's table instead of the method table: `bvh` (the thesis'
-        /// hierarchy metrics per builder on SCENE), `proj` (its chapter 6
-        /// metrics per projection hierarchy, criterion and scheme, beside the
-        /// 3D hierarchies), `proj-series` (chapter 6 over the thesis' ladders,
-        /// its 6.4 conclusions checked; SCENE is ignored), `bvh-series` (thesis
-        /// 6.3.1: tree 1-11 floor whole and split, balls 1-4, gears 1-4, with
-        /// its observations checked; SCENE is ignored), `lcts` (Havran and
-        /// Bittner's Table 2: SCENE may be a comma-separated list, or `spd:all`
-        /// for the eight SPD scenes) or `lcts-res` (Table 3: SCENE, default
-        /// spd:teapot, at 256 to --max-res pixels square).
+        /// A paper's table instead of the method table (see the list below).
         #[arg(long)]
         table: Option<String>,
         /// `--table lcts-res`: the largest resolution (Table 3 goes to 4096).
@@ -106,20 +107,23 @@ enum Command {
         plot: Option<PathBuf>,
     },
     /// Primary and shadow rays through coray and Embree, ray by ray; a diff
-    /// image; exits with status 1 when any ray disagrees beyond a documented tie.
-    #[cfg(feature = "embree")]
+    /// image; exit status 1 when any ray disagrees beyond a documented tie.
+    /// Needs a build with `--features embree` (Debian's libembree-dev).
     Compare {
         /// Scene: an NFF file, `spd:NAME[:SIZE]` or `random[:N]`.
         scene: String,
         /// Resolution N (N x N primary rays).
         #[arg(long, default_value_t = 1024)]
-        res: u32,
+        res: u64,
         /// kd-tree preset.
         #[arg(long, default_value = "auto")]
         preset: String,
-        /// Diff image.
+        /// Diff image (.png or .ppm).
         #[arg(long, default_value = "coray-diff.png")]
         diff: PathBuf,
+        /// Threads (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
     },
     /// Objects by type and, per structure, its size and shape.
     Stats {
@@ -131,141 +135,133 @@ enum Command {
     },
 }
 
+/// The paper tables of `bench --table`, with what each shows: the help
+/// text and the error list both come from here.
+const TABLES: [(&str, &str); 7] = [
+    ("speed", "every method's Mrays/s per ray set against Embree's one-ray and packet calls; SCENE a list, `spd:all` or default the eight SPD scenes and random; at 1 thread and at --threads N"),
+    ("lcts", "Havran and Bittner's Table 2: SCENE may be a comma-separated list, or `spd:all`"),
+    ("lcts-res", "their Table 3: SCENE (default spd:teapot) at 256 to --max-res pixels square"),
+    ("bvh", "the thesis' hierarchy metrics per builder on SCENE (6.3.1)"),
+    ("proj", "the thesis' chapter 6 metrics per projection method on SCENE"),
+    ("bvh-series", "thesis 6.3.1 over its ladders with its observations checked; SCENE ignored"),
+    ("proj-series", "thesis chapter 6 over its ladders with 6.4's conclusions checked; SCENE ignored"),
+];
+
+fn bench_help() -> String {
+    let tables: Vec<String> = TABLES.iter().map(|(n, d)| format!("  {n}: {d}")).collect();
+    format!(
+        "methods: {}\n\ntables (--table):\n{}\n\n{}",
+        Method::help(),
+        tables.join("\n"),
+        bench::report::LEGEND
+    )
+}
+
 fn main() {
-    let cli = Cli::parse();
-    let opts = Options {
-        floor_split: cli.floor_split,
+    let argv: Vec<String> = std::env::args().collect();
+    let cmd = <Cli as clap::CommandFactory>::command()
+        .mut_subcommand("bench", |c| c.after_help(bench_help()));
+    let cli = match <Cli as clap::FromArgMatches>::from_arg_matches(&cmd.get_matches_from(argv)) {
+        Ok(c) => c,
+        Err(e) => e.exit(),
     };
     let command = cli.command.unwrap_or(Command::Render {
         scene: "spd:balls".into(),
         output: "coray.png".into(),
         res: None,
         accel: "kd".into(),
+        preset: "auto".into(),
         depth: 5,
         threads: None,
     });
-    if let Err(e) = run(command, &opts) {
-        eprintln!("coray: {e}");
-        std::process::exit(2);
+    match run(command, cli.floor_split) {
+        Ok(0) => {}
+        Ok(code) => std::process::exit(code),
+        Err(e) => {
+            eprintln!("coray: {e}");
+            std::process::exit(2);
+        }
     }
 }
 
-fn parse_res(s: &str) -> Result<(u32, u32), String> {
+fn threads_or_all(threads: Option<usize>) -> Result<usize, String> {
+    let n = threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    budget::check_count("--threads", n, MAX_THREADS)
+}
+
+/// `WxH` or `N`.
+fn parse_res(s: &str) -> Result<(u64, u64), String> {
     let (w, h) = s.split_once('x').unwrap_or((s, s));
     let p = |v: &str| {
-        v.parse::<u32>()
-            .ok()
-            .filter(|&n| (1..=1 << 15).contains(&n))
-            .ok_or(format!("bad resolution `{s}` (WxH)"))
+        v.parse::<u64>()
+            .map_err(|_| format!("bad resolution `{s}` (WxH or N)"))
     };
     Ok((p(w)?, p(h)?))
 }
 
-/// A scene with its camera set to `res` x `res` pixels.
-fn load_square(scene: &str, res: u32, opts: &Options) -> Result<scene::SceneData, String> {
-    if res == 0 {
-        return Err("--res must be at least 1".into());
-    }
-    let mut s = scene::load(scene, opts)?;
-    s.mesh.camera.width = res;
-    s.mesh.camera.height = res;
+/// A scene with its camera set to `res` x `res` pixels, its memory for
+/// a benchmark of `methods` methods checked.
+fn load_square(name: &str, res: u64, opts: &Options) -> Result<SceneData, String> {
+    let mut s = scene::load(name, opts)?;
+    s.set_resolution(res, res)?;
+    let px = res as f64 * res as f64;
+    budget::check_memory(
+        &format!("{res}x{res} rays on {name}"),
+        px * budget::bytes_per_pixel(s.mesh.lights.len()),
+    )?;
     Ok(s)
 }
 
-/// Where `coray render` writes, and how.
-struct RenderOut<'a> {
-    scene: &'a scene::SceneData,
-    output: &'a std::path::Path,
-    threads: usize,
-    depth: u32,
-}
-
-impl RenderOut<'_> {
-    fn render<S: render::Shooter>(&self, shooter: &S, build_ms: f64) -> Result<(), String> {
-        let s = self.scene;
-        let tracer = render::Tracer {
-            mesh: &s.mesh,
-            shooter,
-            max_depth: self.depth,
-            secondary: Default::default(),
-        };
-        let threads = self.threads;
-        let t = std::time::Instant::now();
-        let (rgb, st) = render::render(&tracer, threads, true);
-        let secs = t.elapsed().as_secs_f64();
-        let (w, h) = (s.mesh.camera.width, s.mesh.camera.height);
-        render::write_png(self.output, w, h, &rgb)?;
-        println!(
-            "{}: {} objects, {w}x{h}, {} rays ({:.2} Mrays/s on {threads} threads, build {:.0} ms) -> {}",
-            s.name,
-            s.mesh.counts.objects(),
-            st.rays,
-            st.rays as f64 / secs / 1e6,
-            build_ms,
-            self.output.display()
-        );
-        Ok(())
+/// Runs one command; the process's exit status.
+fn run(command: Command, floor_split: u32) -> Result<i32, String> {
+    let opts = Options { floor_split };
+    if !(1..=1024).contains(&floor_split) {
+        return Err(format!(
+            "--floor-split must be 1 to 1024, not {floor_split}"
+        ));
     }
-}
-
-fn run(command: Command, opts: &Options) -> Result<(), String> {
     match command {
         Command::Render {
             scene,
             output,
             res,
             accel,
+            preset,
             depth,
             threads,
         } => {
-            let mut s = scene::load(&scene, opts)?;
+            render::ImageFormat::for_path(&output)?;
+            if depth > 64 {
+                return Err(format!("--depth must be 0 to 64, not {depth}"));
+            }
+            let threads = threads_or_all(threads)?;
+            let method = Method::parse(&accel)?;
+            let preset = Preset::parse(&preset)?;
+            let mut s = scene::load(&scene, &opts)?;
             if let Some(r) = res {
                 let (w, h) = parse_res(&r)?;
-                s.mesh.camera.width = w;
-                s.mesh.camera.height = h;
+                s.set_resolution(w, h)?;
             }
-            let threads = threads
-                .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-            let kd = match accel.as_str() {
-                "kd" => Some(("auto", Traversal::Hierarchical)),
-                "kd-rope" => Some(("auto", Traversal::Ropes)),
-                "kd-paper" => Some(("paper", Traversal::Hierarchical)),
-                "kd-paper-rope" => Some(("paper", Traversal::Ropes)),
-                _ => None,
-            };
-            let out = RenderOut {
-                scene: &s,
-                output: &output,
-                threads,
+            let (w, h) = (s.mesh.camera.width, s.mesh.camera.height);
+            budget::check_memory(&format!("a {w}x{h} image"), w as f64 * h as f64 * 3.0)?;
+            let b = built::Built::new(method, &s.mesh, preset, threads)?;
+            let (rgb, rays, secs) = b.visit(render::Job {
+                mesh: &s.mesh,
                 depth,
-            };
-            if let Some((preset, method)) = kd {
-                let owned = kdbuild::OwnedKd::build(&s.mesh.scene(), &kdbuild::preset(preset)?)?;
-                let tree = owned.tree(s.mesh.scene());
-                out.render(
-                    &render::KdShooter {
-                        tree: &tree,
-                        method,
-                    },
-                    owned.build_ms,
-                )
-            } else if let Some(m) = projbuild::parse(&accel) {
-                let scene = s.mesh.scene();
-                let rig = projbuild::ProjRig::for_scene(&s, m)?;
-                let ms = rig.view_ms + rig.light_ms + rig.global_ms;
-                out.render(&render::ProjShooter { rig: &rig, scene }, ms)
-            } else if bvhbuild::METHODS.contains(&accel.as_str()) {
-                let owned = bvhbuild::OwnedBvh::build(&s.mesh.scene(), &accel)?;
-                let bvh = owned.bvh(s.mesh.scene());
-                out.render(&render::BvhShooter { bvh }, owned.build_ms)
-            } else {
-                Err(format!(
-                    "unknown --accel `{accel}` (kd, kd-rope, kd-paper, kd-paper-rope, {}, or \
-                     proj-BUILDER-CRITERIA-SCHEME: {})",
-                    bvhbuild::METHODS.join(", "),
-                    projbuild::methods().join(", ")
-                ))
-            }
+                threads,
+            });
+            render::write_image(&output, w, h, &rgb)?;
+            println!(
+                "{}: {} objects, {w}x{h}, {rays} rays ({:.2} Mrays/s on {threads} thread{}, {method} \
+                 build {:.0} ms) -> {}",
+                s.name,
+                s.mesh.counts.objects(),
+                rays as f64 / secs / 1e6,
+                if threads == 1 { "" } else { "s" },
+                b.build_ms,
+                output.display()
+            );
+            Ok(0)
         }
         Command::Bench {
             scene,
@@ -273,171 +269,232 @@ fn run(command: Command, opts: &Options) -> Result<(), String> {
             methods,
             preset,
             repeat,
+            threads,
             json,
             table,
             max_res,
             max_size,
             plot,
         } => {
-            let params = kdbuild::preset(&preset)?;
-            if table.as_deref() == Some("bvh-series") {
-                let pts = series::run(res, max_size, &params, repeat)?;
-                if json {
-                    println!("{}", series::to_json(&pts));
-                } else {
-                    series::print(&pts, res);
-                    println!();
-                    for o in series::observations(&pts) {
-                        println!("{o}");
-                    }
+            let set = Settings {
+                preset: Preset::parse(&preset)?,
+                repeat: budget::check_count("--repeat", repeat, MAX_REPEAT)?,
+                threads: budget::check_count("--threads", threads, MAX_THREADS)?,
+                progress: !json,
+            };
+            if let Some(p) = &plot {
+                if render::ImageFormat::for_path(p).ok() != Some(render::ImageFormat::Png) {
+                    return Err(format!("{}: charts are written as .png", p.display()));
                 }
-                if let Some(path) = plot {
-                    series::write_plot(&pts, &path, res)?;
-                    eprintln!("charts -> {}", path.display());
-                }
-                return Ok(());
             }
-            if table.as_deref() == Some("proj-series") {
-                let pts = proj_series::run(res, max_size, &params, repeat)?;
-                proj_series::print(&pts, res);
-                println!();
-                for c in proj_series::conclusions(&pts) {
-                    println!("{c}");
-                }
-                if let Some(path) = plot {
-                    proj_series::write_plot(&pts, &path, res)?;
-                    eprintln!("charts -> {}", path.display());
-                }
-                return Ok(());
-            }
-            if plot.is_some() || max_size.is_some() {
+            let is_series = matches!(table.as_deref(), Some("bvh-series" | "proj-series"));
+            if (plot.is_some() || max_size.is_some()) && !is_series {
                 return Err(
                     "--plot and --max-size go with --table bvh-series or proj-series".into(),
                 );
             }
-            if let Some(table) = table {
-                return paper_table(&table, &scene, res, max_res, &params, repeat, json, opts);
+            if methods.is_some() && table.is_some() {
+                return Err(
+                    "--methods and --table do not go together: a table has its methods".into(),
+                );
             }
-            let s = load_square(&scene, res, opts)?;
-            let methods = methods
-                .unwrap_or_else(|| bench::all_methods().iter().map(|m| m.to_string()).collect());
-            let rows = bench::bench(&s, &methods, &params, repeat, true)?;
-            if json {
-                println!("{}", bench::to_json(&s, &rows));
-            } else {
-                bench::print_table(&s, &rows);
+            match table {
+                None => {
+                    let methods = match methods {
+                        Some(v) => v
+                            .iter()
+                            .map(|m| Method::parse(m))
+                            .collect::<Result<_, _>>()?,
+                        None => Method::all(),
+                    };
+                    let s = load_square(&scene, res, &opts)?;
+                    let rows = bench::bench(&s, &methods, &set)?;
+                    if json {
+                        println!("{}", bench::report::to_json(&s, &rows, set.threads));
+                    } else {
+                        bench::report::print_table(&s, &rows, set.threads);
+                    }
+                }
+                Some(t) => {
+                    paper_table(&t, &scene, res, max_res, max_size, plot, json, &set, &opts)?
+                }
             }
-            Ok(())
+            Ok(0)
         }
-        #[cfg(feature = "embree")]
         Command::Compare {
             scene,
             res,
             preset,
             diff,
+            threads,
         } => {
-            let s = load_square(&scene, res, opts)?;
-            let out = compare::compare(&s, &kdbuild::preset(&preset)?, &diff)?;
+            render::ImageFormat::for_path(&diff)?;
+            Method::Embree(method::EmbreeCall::One).available()?;
+            let threads = threads_or_all(threads)?;
+            let s = load_square(&scene, res, &opts)?;
+            let out = compare::compare(&s, Preset::parse(&preset)?, threads, &diff)?;
             if out.mismatches > 0 {
                 eprintln!(
                     "coray: {} of {} rays disagree with Embree",
                     out.mismatches, out.rays
                 );
-                std::process::exit(1);
+                return Ok(1);
             }
-            Ok(())
+            Ok(0)
         }
         Command::Stats { scene, json } => {
-            let s = scene::load(&scene, opts)?;
+            let s = scene::load(&scene, &opts)?;
             let report = stats::stats(&s)?;
-            println!("{}", if json { report.json } else { report.text });
-            Ok(())
+            if json {
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?
+                );
+            } else {
+                stats::print(&report);
+            }
+            Ok(0)
         }
     }
 }
 
-/// `coray bench --table lcts|lcts-res`.
+/// `coray bench --table NAME`.
 #[allow(clippy::too_many_arguments)]
 fn paper_table(
     table: &str,
     scene: &str,
-    res: u32,
+    res: u64,
     max_res: u32,
-    params: &coray::kd::KdParams,
-    repeat: usize,
+    max_size: Option<u32>,
+    plot: Option<PathBuf>,
     json: bool,
+    set: &Settings,
     opts: &Options,
 ) -> Result<(), String> {
-    let mut cols = Vec::new();
-    let kind = match table {
-        "proj" => {
-            let s = load_square(scene, res, opts)?;
-            let mut methods = vec!["kd".to_string()];
-            methods.extend(projbuild::BUILDERS.iter().map(|m| m.to_string()));
-            methods.extend(projbuild::methods());
-            if cfg!(feature = "embree") {
-                methods.push("embree".into());
-            }
-            let rows = bench::bench(&s, &methods, params, repeat, true)?;
-            if json {
-                println!("{}", bench::to_json(&s, &rows));
-            } else {
-                bench::print_proj_table(&s, &rows);
-            }
-            return Ok(());
-        }
-        "bvh" => {
-            let s = load_square(scene, res, opts)?;
-            let mut methods = vec!["kd".to_string()];
-            methods.extend(bvhbuild::METHODS.iter().map(|m| m.to_string()));
-            let rows = bench::bench(&s, &methods, params, repeat, true)?;
-            if json {
-                println!("{}", bench::to_json(&s, &rows));
-            } else {
-                bench::print_bvh_table(&s, &rows);
-            }
-            return Ok(());
-        }
-        "lcts" => {
-            let scenes: Vec<String> = if scene == "spd:all" {
-                tables::SPD_SCENES
+    let one = Settings { threads: 1, ..*set };
+    match table {
+        "speed" => {
+            let scenes: Vec<String> = match scene {
+                "random" | "spd:all" => lcts_table::SPD_SCENES
                     .iter()
                     .map(|n| format!("spd:{n}"))
-                    .collect()
-            } else {
-                scene.split(',').map(str::to_string).collect()
+                    .chain((scene == "random").then(|| "random".to_string()))
+                    .collect(),
+                _ => scene.split(',').map(str::to_string).collect(),
             };
+            let mut counts = vec![1];
+            if set.threads > 1 {
+                counts.push(set.threads);
+            }
+            let mut rows = Vec::new();
             for name in &scenes {
                 let s = load_square(name, res, opts)?;
-                let label = name.strip_prefix("spd:").unwrap_or(name).to_string();
-                cols.push(tables::column(&s, label, params, repeat)?);
+                rows.extend(bench::speed::run(&s, set, &counts)?);
             }
-            tables::Table::Scenes
-        }
-        "lcts-res" => {
-            // The default scene of `bench` is random; Table 3 is teapot's.
-            let name = if scene == "random" {
-                "spd:teapot"
+            if json {
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(&rows).map_err(|e| e.to_string())?
+                );
             } else {
-                scene
-            };
-            for r in tables::RESOLUTIONS.iter().filter(|&&r| r <= max_res) {
-                let s = load_square(name, *r, opts)?;
-                cols.push(tables::column(&s, format!("{r}^2"), params, repeat)?);
+                bench::speed::print(&rows);
             }
-            tables::Table::Resolutions
         }
-        t => return Err(format!("unknown --table `{t}` (lcts, lcts-res, bvh)")),
-    };
-    if cols.is_empty() {
-        return Err(format!(
-            "--max-res {max_res} leaves no resolution (smallest 256)"
-        ));
-    }
-    if json {
-        println!("{}", tables::to_json(&cols));
-    } else {
-        tables::print(kind, &cols);
+        "bvh" | "proj" => {
+            let s = load_square(scene, res, opts)?;
+            let mut methods = vec![Method::kd(Traversal::Hierarchical)];
+            if table == "bvh" {
+                methods.extend(
+                    method::BVH_NAMES
+                        .iter()
+                        .map(|&(name, build)| Method::Bvh { name, build }),
+                );
+            } else {
+                methods.extend(
+                    method::PROJ_BUILDERS
+                        .iter()
+                        .map(|m| Method::parse(m).expect("registered")),
+                );
+                methods.extend(Method::projections());
+                if cfg!(feature = "embree") {
+                    methods.push(Method::Embree(method::EmbreeCall::One));
+                }
+            }
+            let rows = bench::bench(&s, &methods, &one)?;
+            if json {
+                println!("{}", bench::report::to_json(&s, &rows, 1));
+            } else if table == "bvh" {
+                bench::report::print_bvh_table(&s, &rows);
+            } else {
+                bench::report::print_proj_table(&s, &rows);
+            }
+        }
+        "bvh-series" | "proj-series" => {
+            let study = series::STUDIES
+                .iter()
+                .find(|s| s.table == table)
+                .expect("every series table has a study");
+            let side = budget::check_side("--res", res)?;
+            let pts = series::run(study, side, max_size, &one)?;
+            if json {
+                println!("{}", series::to_json(study, &pts));
+            } else {
+                series::print(study, &pts, side);
+            }
+            if let Some(path) = plot {
+                series::write_plot(study, &pts, &path, side)?;
+                eprintln!("charts -> {}", path.display());
+            }
+        }
+        "lcts" | "lcts-res" => {
+            let mut cols = Vec::new();
+            let kind = if table == "lcts" {
+                let scenes: Vec<String> = if scene == "spd:all" {
+                    lcts_table::SPD_SCENES
+                        .iter()
+                        .map(|n| format!("spd:{n}"))
+                        .collect()
+                } else {
+                    scene.split(',').map(str::to_string).collect()
+                };
+                for name in &scenes {
+                    let s = load_square(name, res, opts)?;
+                    let label = name.strip_prefix("spd:").unwrap_or(name).to_string();
+                    cols.push(lcts_table::column(&s, label, &one)?);
+                }
+                lcts_table::Table::Scenes
+            } else {
+                // The default scene of `bench` is random; Table 3 is teapot's.
+                let name = if scene == "random" {
+                    "spd:teapot"
+                } else {
+                    scene
+                };
+                for r in lcts_table::RESOLUTIONS.iter().filter(|&&r| r <= max_res) {
+                    let s = load_square(name, *r as u64, opts)?;
+                    cols.push(lcts_table::column(&s, format!("{r}^2"), &one)?);
+                }
+                if cols.is_empty() {
+                    return Err(format!(
+                        "--max-res {max_res} leaves no resolution (the smallest is {})",
+                        lcts_table::RESOLUTIONS[0]
+                    ));
+                }
+                lcts_table::Table::Resolutions
+            };
+            if json {
+                println!("{}", lcts_table::to_json(&cols));
+            } else {
+                lcts_table::print(kind, &cols);
+            }
+        }
+        t => {
+            let names: Vec<&str> = TABLES.iter().map(|(n, _)| *n).collect();
+            return Err(format!(
+                "unknown --table `{t}` (have: {})",
+                names.join(", ")
+            ));
+        }
     }
     Ok(())
 }

@@ -423,5 +423,5 @@ pub fn write(
             x += 38 + text_width(&c.name, 2) + 30;
         }
     }
-    crate::render::write_png(path, w as u32, h as u32, &cv.rgb)
+    crate::render::write_image(path, w as u32, h as u32, &cv.rgb)
 }

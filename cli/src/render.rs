@@ -1,118 +1,22 @@
-//! `coray render`: a Whitted ray tracer over any coray structure. Primary
+//! `coray render`: a Whitted ray tracer over any built method. Primary
 //! rays, a shadow ray to every light, reflection (Ks) and refraction (T,
 //! index of refraction) to a depth limit, NFF materials, `pp` normals
 //! interpolated. Rows are shared among threads; the structure is immutable.
+//! Shadow rays do not say which light they go to (projection methods then
+//! choose a light plane as the thesis' uniform mode does).
 
-use coray::bvh::{Bvh, BvhStackItem, BvhStats};
-use coray::kd::{KdTree, Traversal};
-use coray::{Aabb, Hit, Ray, TraceStats, Vec3};
+use crate::shoot::Shooter;
+use coray::{Hit, Ray, TraceStats, Vec3};
 use coray_scenes::SceneMesh;
-use std::io::{IsTerminal, Write};
 use std::sync::atomic::{AtomicUsize, Ordering};
-
-/// A structure the renderer shoots rays through, with the per-thread state
-/// its traversal needs. The structure (and traversal) is chosen once per
-/// render: each kind gets its own monomorphised loop.
-pub trait Shooter: Sync {
-    /// Per-thread traversal state (a BVH's stack).
-    type Ctx;
-    fn ctx(&self) -> Self::Ctx;
-    fn intersect(&self, ray: &Ray, ctx: &mut Self::Ctx, st: &mut TraceStats) -> Hit;
-    fn occluded(&self, ray: &Ray, ctx: &mut Self::Ctx, st: &mut TraceStats) -> bool;
-    fn bounds(&self) -> Aabb;
-}
-
-/// A kd-tree with a fixed traversal.
-pub struct KdShooter<'a> {
-    pub tree: &'a KdTree<'a>,
-    pub method: Traversal,
-}
-
-impl Shooter for KdShooter<'_> {
-    type Ctx = ();
-    fn ctx(&self) {}
-    fn intersect(&self, ray: &Ray, _: &mut (), st: &mut TraceStats) -> Hit {
-        self.tree.intersect(ray, self.method, st)
-    }
-    fn occluded(&self, ray: &Ray, _: &mut (), st: &mut TraceStats) -> bool {
-        self.tree.occluded(ray, self.method, st)
-    }
-    fn bounds(&self) -> Aabb {
-        self.tree.info.bounds()
-    }
-}
-
-/// A bounding volume hierarchy (any builder).
-pub struct BvhShooter<'a> {
-    pub bvh: Bvh<'a>,
-}
-
-impl Shooter for BvhShooter<'_> {
-    type Ctx = (Vec<BvhStackItem>, BvhStats);
-    fn ctx(&self) -> Self::Ctx {
-        (
-            vec![BvhStackItem::default(); self.bvh.stack_len()],
-            BvhStats::default(),
-        )
-    }
-    fn intersect(&self, ray: &Ray, ctx: &mut Self::Ctx, st: &mut TraceStats) -> Hit {
-        ctx.1 = BvhStats::default();
-        let h = self.bvh.intersect(ray, &mut ctx.0, &mut ctx.1);
-        st.add(&ctx.1.trace);
-        h
-    }
-    fn occluded(&self, ray: &Ray, ctx: &mut Self::Ctx, st: &mut TraceStats) -> bool {
-        ctx.1 = BvhStats::default();
-        let o = self.bvh.occluded(ray, &mut ctx.0, &mut ctx.1);
-        st.add(&ctx.1.trace);
-        o
-    }
-    fn bounds(&self) -> Aabb {
-        let r = self.bvh.nodes[self.bvh.info.root as usize];
-        r.bounds()
-    }
-}
-
-/// Projection hierarchies: the camera's for primary rays, the lights'
-/// planes for shadow rays (uniform mode: the renderer does not say which
-/// light a ray is for), the global 3D hierarchy for the rest.
-pub struct ProjShooter<'a> {
-    pub rig: &'a crate::projbuild::ProjRig,
-    pub scene: coray::Scene<'a>,
-}
-
-impl Shooter for ProjShooter<'_> {
-    type Ctx = (Vec<BvhStackItem>, coray::proj::ProjStats);
-    fn ctx(&self) -> Self::Ctx {
-        (
-            vec![BvhStackItem::default(); self.rig.stack_len(self.scene)],
-            Default::default(),
-        )
-    }
-    fn intersect(&self, ray: &Ray, ctx: &mut Self::Ctx, st: &mut TraceStats) -> Hit {
-        ctx.1 = Default::default();
-        let h = self.rig.intersect(self.scene, ray, &mut ctx.0, &mut ctx.1);
-        st.add(&ctx.1.bvh.trace);
-        h
-    }
-    fn occluded(&self, ray: &Ray, ctx: &mut Self::Ctx, st: &mut TraceStats) -> bool {
-        ctx.1 = Default::default();
-        let o = self
-            .rig
-            .occluded(self.scene, ray, None, &mut ctx.0, &mut ctx.1);
-        st.add(&ctx.1.bvh.trace);
-        o
-    }
-    fn bounds(&self) -> Aabb {
-        let b = self.rig.global.bvh(self.scene);
-        b.nodes[b.info.root as usize].bounds()
-    }
-}
 
 /// What a render needs to trace rays.
 pub struct Tracer<'a, S: Shooter> {
+    /// The scene, for materials, normals and lights.
     pub mesh: &'a SceneMesh,
+    /// What rays are shot through.
     pub shooter: &'a S,
+    /// Reflection and refraction depth.
     pub max_depth: u32,
     /// Reflection and refraction rays traced so far (all threads).
     pub secondary: std::sync::atomic::AtomicU64,
@@ -180,13 +84,17 @@ impl<S: Shooter> Tracer<'_, S> {
         for (lp, lc) in &self.mesh.lights {
             let to = *lp - p;
             let dist = to.length();
+            if !(dist > 0.0 && dist.is_finite()) {
+                // A light on the surface (or at infinity) lights nothing here.
+                continue;
+            }
             let l = to / dist;
             let ndl = n.dot(l);
             if ndl <= 0.0 {
                 continue;
             }
             let shadow = Ray::new(p, l, eps, dist);
-            if self.shooter.occluded(&shadow, ctx, st) {
+            if self.shooter.occluded(&shadow, None, ctx, st) {
                 continue;
             }
             c += color * *lc * (m.kd * ndl * light_scale);
@@ -226,15 +134,15 @@ impl<S: Shooter> Tracer<'_, S> {
 
 /// Renders the camera's image with `threads` threads; RGB bytes, row 0 on top.
 pub fn render<S: Shooter>(t: &Tracer<S>, threads: usize, progress: bool) -> (Vec<u8>, TraceStats) {
+    let pb = crate::bench::progress(t.mesh.camera.height as usize, progress);
+    pb.set_message("rows");
     let cam = &t.mesh.camera;
     let (w, h) = (cam.width as usize, cam.height as usize);
     let (f, r, u) = cam.basis();
     let next = AtomicUsize::new(0);
-    let done = AtomicUsize::new(0);
     let mut image = vec![0u8; w * h * 3];
     let rows: Vec<std::sync::Mutex<&mut [u8]>> =
         image.chunks_mut(w * 3).map(std::sync::Mutex::new).collect();
-    let show = progress && std::io::stderr().is_terminal();
     let mut total = TraceStats::default();
     std::thread::scope(|s| {
         let handles: Vec<_> = (0..threads.max(1))
@@ -262,11 +170,7 @@ pub fn render<S: Shooter>(t: &Tracer<S>, threads: usize, progress: bool) -> (Vec
                                     (v.clamp(0.0, 1.0).powf(1.0 / 2.2) * 255.0 + 0.5) as u8;
                             }
                         }
-                        let d = done.fetch_add(1, Ordering::Relaxed) + 1;
-                        if show && (d.is_multiple_of(16) || d == h) {
-                            eprint!("\rrendering {:3}%", d * 100 / h);
-                            let _ = std::io::stderr().flush();
-                        }
+                        pb.inc(1);
                     }
                     st
                 })
@@ -276,19 +180,82 @@ pub fn render<S: Shooter>(t: &Tracer<S>, threads: usize, progress: bool) -> (Vec
             total.add(&hd.join().unwrap());
         }
     });
-    if show {
-        eprintln!();
-    }
+    pb.finish_and_clear();
     drop(rows);
     (image, total)
 }
 
-/// Writes RGB bytes as an 8-bit PNG.
-pub fn write_png(path: &std::path::Path, w: u32, h: u32, rgb: &[u8]) -> Result<(), String> {
-    let file = std::fs::File::create(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), w, h);
-    enc.set_color(png::ColorType::Rgb);
-    enc.set_depth(png::BitDepth::Eight);
-    let mut writer = enc.write_header().map_err(|e| e.to_string())?;
-    writer.write_image_data(rgb).map_err(|e| e.to_string())
+/// An image file format, chosen by the file's extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageFormat {
+    /// `.png`: 8-bit RGB.
+    Png,
+    /// `.ppm`: binary portable pixmap (P6).
+    Ppm,
+}
+
+impl ImageFormat {
+    /// The format of `path`, or an error naming the ones there are.
+    pub fn for_path(path: &std::path::Path) -> Result<ImageFormat, String> {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        match ext.as_deref() {
+            Some("png") => Ok(ImageFormat::Png),
+            Some("ppm") => Ok(ImageFormat::Ppm),
+            _ => Err(format!(
+                "{}: the image format comes from the extension: .png or .ppm",
+                path.display()
+            )),
+        }
+    }
+}
+
+/// Writes RGB bytes (row 0 on top) in the format of `path`'s extension.
+pub fn write_image(path: &std::path::Path, w: u32, h: u32, rgb: &[u8]) -> Result<(), String> {
+    let err = |e: &dyn std::fmt::Display| format!("{}: {e}", path.display());
+    let file = std::fs::File::create(path).map_err(|e| err(&e))?;
+    let mut out = std::io::BufWriter::new(file);
+    match ImageFormat::for_path(path)? {
+        ImageFormat::Png => {
+            let mut enc = png::Encoder::new(out, w, h);
+            enc.set_color(png::ColorType::Rgb);
+            enc.set_depth(png::BitDepth::Eight);
+            let mut writer = enc.write_header().map_err(|e| err(&e))?;
+            writer.write_image_data(rgb).map_err(|e| err(&e))
+        }
+        ImageFormat::Ppm => {
+            use std::io::Write;
+            write!(out, "P6\n{w} {h}\n255\n").map_err(|e| err(&e))?;
+            out.write_all(rgb).map_err(|e| err(&e))?;
+            out.flush().map_err(|e| err(&e))
+        }
+    }
+}
+
+/// A render of the scene's camera as a job for any built method:
+/// (RGB bytes, rays traced, seconds).
+pub struct Job<'a> {
+    /// The scene.
+    pub mesh: &'a SceneMesh,
+    /// Reflection and refraction depth.
+    pub depth: u32,
+    /// Threads.
+    pub threads: usize,
+}
+
+impl crate::built::Visit for Job<'_> {
+    type Out = (Vec<u8>, u64, f64);
+    fn visit<S: Shooter>(self, shooter: &S) -> Self::Out {
+        let tracer = Tracer {
+            mesh: self.mesh,
+            shooter,
+            max_depth: self.depth,
+            secondary: Default::default(),
+        };
+        let t = std::time::Instant::now();
+        let (rgb, st) = render(&tracer, self.threads, true);
+        (rgb, st.rays, t.elapsed().as_secs_f64())
+    }
 }

@@ -1,52 +1,69 @@
-//! `coray_bvh_*`: bounding volume hierarchies built four ways (TDBS, TDBS
-//! with the SAH, bottom-up matching, R-tree and R*-tree), one arena format:
-//! requirements, build, info, validate, insert, delete, intersect, occluded.
+//! `coray_bvh_*`: bounding volume hierarchies built six ways (TDBS, TDBS
+//! by the SAH, bottom-up matching quadratic or by a chain, R-tree,
+//! R*-tree), one arena format: parameters, requirements, build, open,
+//! info, validate, intersect, occluded, and the R-trees' insert and delete.
 
-use crate::carve::{self, check_arena, slice_mut, slice_ref};
-use crate::types::{CorayHit, CorayRay, CorayScene, CorayTraceStats};
-use crate::{guard, CorayStatus};
-use coray::arena::{
-    BvhArenaHeader, BvhArenaLayout, BvhScratchLayout, BVH_FLAG_REINSERT, BVH_FLAG_RSTAR,
-    BVH_HEADER_BYTES, BVH_MAGIC, BVH_VERSION,
+use crate::abi::*;
+use crate::carve::{self, check_arena, Out, OutValue, Regions, Versioned};
+use crate::handle::{self, Handle, KIND_BVH};
+use crate::{guard, CorayBvh, CorayStatus};
+use coray::bvh::layout::{
+    code, BvhArenaHeader, BvhArenaLayout, BvhScratchLayout, BVH_HEADER_BYTES, BVH_MAGIC,
+    BVH_VERSION,
 };
 use coray::bvh::{
-    self, Builder, Bvh, BvhNode, BvhStackItem, BvhStats, InsertOrder, RTree, RTreeParams, Split,
+    self, Builder, Bvh, BvhNode, BvhStackItem, InsertOrder, RTree, RTreeParams, Split,
 };
-use coray::{Aabb, Scene};
+use coray::limits::MAX_PRIMS;
+use coray::{Aabb, Scene, TraceStats};
 use core::ffi::c_void;
 use core::mem::size_of;
 
+/// How a hierarchy is built: one of the `CORAY_BVH_BUILDER_*`.
+pub type CorayBvhBuilder = u32;
 /// Top-down binary splitting, children of most nearly equal surface area (the thesis' TDBS).
-pub const CORAY_BVH_TDBS: u32 = 0;
+pub const CORAY_BVH_BUILDER_TDBS: CorayBvhBuilder = 0;
 /// Top-down binary splitting by the surface area heuristic.
-pub const CORAY_BVH_TDBS_SAH: u32 = 1;
+pub const CORAY_BVH_BUILDER_TDBS_SAH: CorayBvhBuilder = 1;
 /// Bottom-up matching: join the pair with the smallest joint box, repeatedly.
-pub const CORAY_BVH_NN: u32 = 2;
+pub const CORAY_BVH_BUILDER_NN: CorayBvhBuilder = 2;
 /// Guttman's R-tree (quadratic split); dynamic.
-pub const CORAY_BVH_RTREE: u32 = 3;
-/// The R*-tree (no forced reinsertion); dynamic.
-pub const CORAY_BVH_RSTAR: u32 = 4;
+pub const CORAY_BVH_BUILDER_RTREE: CorayBvhBuilder = 3;
+/// The R*-tree; dynamic.
+pub const CORAY_BVH_BUILDER_RSTAR: CorayBvhBuilder = 4;
 /// Bottom-up matching by a nearest-neighbour chain: the joins of
-/// `CORAY_BVH_NN` (exact ties aside) in sub-quadratic time.
-pub const CORAY_BVH_NN_CHAIN: u32 = 5;
+/// `CORAY_BVH_BUILDER_NN` (exact ties aside) in sub-quadratic time.
+pub const CORAY_BVH_BUILDER_NN_CHAIN: CorayBvhBuilder = 5;
 
-/// R-trees insert in scene order.
-pub const CORAY_BVH_ORDER_SCENE: u32 = 0;
-/// R-trees insert in a shuffled order (`seed`).
-pub const CORAY_BVH_ORDER_SHUFFLED: u32 = 1;
-/// R-trees insert in Morton order of the box centres.
-pub const CORAY_BVH_ORDER_SORTED: u32 = 2;
+/// The order an R-tree build inserts the primitives in: `CORAY_BVH_ORDER_*`.
+pub type CorayBvhOrder = u32;
+// The numbers are the arena header's (cbindgen needs literals).
+const _: () = assert!(
+    CORAY_BVH_BUILDER_TDBS == code::TDBS
+        && CORAY_BVH_BUILDER_TDBS_SAH == code::TDBS_SAH
+        && CORAY_BVH_BUILDER_NN == code::NN
+        && CORAY_BVH_BUILDER_RTREE == code::RTREE
+        && CORAY_BVH_BUILDER_RSTAR == code::RSTAR
+        && CORAY_BVH_BUILDER_NN_CHAIN == code::NN_CHAIN
+);
 
-/// Parameters of a hierarchy build. Get them from [`coray_bvh_params_default`].
+/// Scene order.
+pub const CORAY_BVH_ORDER_SCENE: CorayBvhOrder = 0;
+/// A shuffled order (`seed`).
+pub const CORAY_BVH_ORDER_SHUFFLED: CorayBvhOrder = 1;
+/// Morton order of the box centres.
+pub const CORAY_BVH_ORDER_SORTED: CorayBvhOrder = 2;
+
+/// Parameters of a hierarchy build. Get them from `coray_bvh_params_default`.
 #[repr(C)]
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 pub struct CorayBvhParams {
     /// `sizeof(CorayBvhParams)`.
     pub struct_size: usize,
     /// R-trees: the shuffle's seed with `CORAY_BVH_ORDER_SHUFFLED`.
     pub seed: u64,
-    /// `CORAY_BVH_TDBS`, `_TDBS_SAH`, `_NN`, `_NN_CHAIN`, `_RTREE` or `_RSTAR`.
-    pub builder: u32,
+    /// `CORAY_BVH_BUILDER_*`.
+    pub builder: CorayBvhBuilder,
     /// TDBS builders: most primitives per leaf (at least 1; the thesis: 1).
     /// Bottom-up matching always makes leaves of 1.
     pub leaf_size: u32,
@@ -55,9 +72,9 @@ pub struct CorayBvhParams {
     /// R-trees: m, fewest entries per node but the root, 2 to M / 2 (default 3).
     pub min_children: u32,
     /// R-trees: `CORAY_BVH_ORDER_*`, the order a build inserts the primitives.
-    pub insert_order: u32,
+    pub insert_order: CorayBvhOrder,
     /// R-trees: 1 to build an empty tree (objects then enter by
-    /// [`coray_bvh_insert`]); 0 to insert every primitive.
+    /// `coray_bvh_insert`); 0 to insert every primitive.
     pub start_empty: u32,
     /// R-trees: 1 for the R*-tree's forced reinsertion (the first overflow
     /// at a level during an insert reinserts 30% of the node's entries
@@ -65,43 +82,32 @@ pub struct CorayBvhParams {
     pub forced_reinsert: u32,
 }
 
-/// Arena sizes for a hierarchy, from [`coray_bvh_requirements`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default)]
-pub struct CorayBvhRequirements {
-    /// The hierarchy arena. Static builders need exactly this; an R-tree's
-    /// arena of this size holds up to `prim_count` objects, and a larger one
-    /// proportionally more.
-    pub bvh_bytes: usize,
-    /// Scratch for a build, and for an R-tree's deletes.
-    pub scratch_bytes: usize,
-}
-
-/// What a hierarchy holds (read from its arena header, O(1)).
+/// What a hierarchy holds, from `coray_bvh_info` (O(1)).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default)]
 pub struct CorayBvhInfo {
-    /// The builder, `CORAY_BVH_*`.
-    pub builder: u32,
+    /// `sizeof(CorayBvhInfo)`.
+    pub struct_size: usize,
+    /// The builder, `CORAY_BVH_BUILDER_*`.
+    pub builder: CorayBvhBuilder,
     /// Nodes in use, interior and leaf.
     pub node_count: u32,
     /// Leaves in use.
     pub leaf_count: u32,
     /// Primitives in the hierarchy.
-    pub object_count: u32,
+    pub ref_count: u32,
     /// Levels below the root.
     pub depth: u32,
     /// Most children a node may have (2, or the R-tree's M).
     pub max_children: u32,
     /// Most objects the hierarchy may hold: for an R-tree, what its arena
     /// holds whatever the order of inserts and deletes (inserts beyond it
-    /// get `CORAY_STATUS_ARENA_TOO_SMALL`); static builders: `object_count`.
+    /// get `CORAY_STATUS_ARENA_TOO_SMALL`); static builders: `ref_count`.
     pub capacity: u32,
     /// Bytes of the arena the layout covers.
     pub arena_bytes_used: usize,
-    /// Bytes of traversal stack that [`coray_bvh_intersect`] and
-    /// [`coray_bvh_occluded`] need (4-byte aligned). Inserts can deepen an
-    /// R-tree: read it again after them.
+    /// Bytes of traversal stack every trace and validate call needs.
+    /// Inserts can deepen an R-tree: read it again after them.
     pub stack_bytes: usize,
     /// Lower corner of the root box (empty hierarchy: +inf).
     pub bounds_min: [f32; 3],
@@ -109,41 +115,23 @@ pub struct CorayBvhInfo {
     pub bounds_max: [f32; 3],
 }
 
-/// Figures of a validated hierarchy, from [`coray_bvh_validate`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default)]
-pub struct CorayBvhTreeStats {
-    /// Nodes reached from the root.
-    pub node_count: u32,
-    /// Leaves reached.
-    pub leaf_count: u32,
-    /// References in them.
-    pub ref_count: u32,
-    /// Deepest leaf.
-    pub depth: u32,
+// SAFETY (both): repr(C), size_t struct_size first, integer and float
+// fields only; as first published.
+unsafe impl Versioned for CorayBvhParams {
+    const SIZE_1_0: usize = size_of::<Self>();
+}
+unsafe impl Versioned for CorayBvhInfo {
+    const SIZE_1_0: usize = size_of::<Self>();
 }
 
-/// Work done by one hierarchy trace call, in the thesis' terms.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default)]
-pub struct CorayBvhStats {
-    /// Rays, nodes visited, primitive tests.
-    pub trace: CorayTraceStats,
-    /// Hierarchy objects (boxes) tested.
-    pub box_tests: u64,
-    /// Their cost in the thesis' units (a box test costs 2 to 51).
-    pub box_cost: u64,
-    /// Cost of the actual objects (primitives) tested, in the same units.
-    pub prim_cost: u64,
-}
-
-/// Default parameters for `builder` (`CORAY_BVH_*`) with `struct_size`
-/// set. An unknown builder gives `struct_size` 0, which every call rejects.
+/// Default parameters for `builder` with `struct_size` set; an unknown
+/// builder gives `struct_size` 0, which every call refuses.
 #[no_mangle]
-pub extern "C" fn coray_bvh_params_default(builder: u32) -> CorayBvhParams {
+pub extern "C" fn coray_bvh_params_default(builder: CorayBvhBuilder) -> CorayBvhParams {
     let r = RTreeParams::rtree();
+    let known = code::to_static(builder).is_some() || code::is_rtree(builder);
     CorayBvhParams {
-        struct_size: if builder <= CORAY_BVH_NN_CHAIN {
+        struct_size: if known {
             size_of::<CorayBvhParams>()
         } else {
             0
@@ -159,7 +147,17 @@ pub extern "C" fn coray_bvh_params_default(builder: u32) -> CorayBvhParams {
     }
 }
 
+/// A `CorayBvhInfo` to fill, `struct_size` set.
+#[no_mangle]
+pub extern "C" fn coray_bvh_info_default() -> CorayBvhInfo {
+    CorayBvhInfo {
+        struct_size: size_of::<CorayBvhInfo>(),
+        ..Default::default()
+    }
+}
+
 /// A checked copy of the caller's parameters.
+#[derive(Clone, Copy)]
 pub(crate) enum Kind {
     Static(Builder, u32),
     RTree(RTreeParams),
@@ -167,10 +165,21 @@ pub(crate) enum Kind {
 
 impl CorayBvhParams {
     pub(crate) fn to_core(self) -> Result<Kind, CorayStatus> {
-        if self.struct_size != size_of::<CorayBvhParams>()
-            || self.start_empty > 1
-            || self.forced_reinsert > 1
-        {
+        if self.start_empty > 1 || self.forced_reinsert > 1 {
+            return Err(CorayStatus::InvalidParameter);
+        }
+        if let Some(b) = code::to_static(self.builder) {
+            let leaf = if matches!(b, Builder::Tdbs | Builder::TdbsSah) {
+                self.leaf_size
+            } else {
+                1
+            };
+            if leaf == 0 || self.start_empty != 0 {
+                return Err(CorayStatus::InvalidParameter);
+            }
+            return Ok(Kind::Static(b, leaf));
+        }
+        if !code::is_rtree(self.builder) {
             return Err(CorayStatus::InvalidParameter);
         }
         let order = match self.insert_order {
@@ -179,213 +188,186 @@ impl CorayBvhParams {
             CORAY_BVH_ORDER_SORTED => InsertOrder::Sorted,
             _ => return Err(CorayStatus::InvalidParameter),
         };
-        let rtree = |split| {
-            let p = RTreeParams {
-                split,
-                max_children: self.max_children,
-                min_children: self.min_children,
-                order,
-                forced_reinsert: self.forced_reinsert == 1,
-            };
-            // Same rule as the core's: a zero-capacity requirement checks it.
-            let bad = !(4..=bvh::MAX_CHILDREN).contains(&p.max_children)
-                || p.min_children < 2
-                || p.min_children > p.max_children / 2;
-            if bad {
-                Err(CorayStatus::InvalidParameter)
+        let p = RTreeParams {
+            split: if self.builder == CORAY_BVH_BUILDER_RSTAR {
+                Split::RStar
             } else {
-                Ok(Kind::RTree(p))
-            }
+                Split::Quadratic
+            },
+            max_children: self.max_children,
+            min_children: self.min_children,
+            order,
+            forced_reinsert: self.forced_reinsert == 1,
         };
-        let leaf = |b| {
-            if self.leaf_size == 0 {
-                Err(CorayStatus::InvalidParameter)
-            } else {
-                Ok(Kind::Static(b, self.leaf_size))
-            }
-        };
-        match self.builder {
-            CORAY_BVH_TDBS => leaf(Builder::Tdbs),
-            CORAY_BVH_TDBS_SAH => leaf(Builder::TdbsSah),
-            CORAY_BVH_NN => Ok(Kind::Static(Builder::Nn, 1)),
-            CORAY_BVH_NN_CHAIN => Ok(Kind::Static(Builder::NnChain, 1)),
-            CORAY_BVH_RTREE => rtree(Split::Quadratic),
-            CORAY_BVH_RSTAR => rtree(Split::RStar),
-            _ => Err(CorayStatus::InvalidParameter),
-        }
+        p.check()?;
+        Ok(Kind::RTree(p))
     }
-}
-
-/// Most primitives a hierarchy indexes, as for the kd-tree.
-pub(crate) const MAX_PRIMS: usize = 1 << 30;
-
-/// The arena layout of an R-tree for `capacity` objects.
-fn rtree_layout(capacity: usize, p: &RTreeParams) -> BvhArenaLayout {
-    let r = bvh::rtree_requirements(capacity, p);
-    BvhArenaLayout::of(r.nodes, r.refs)
-}
-
-/// The largest R-tree capacity whose layout fits in `bytes`, if any reaches `min`.
-fn rtree_fit(bytes: usize, min: usize, p: &RTreeParams) -> Option<usize> {
-    if rtree_layout(min, p).total_bytes > bytes {
-        return None;
-    }
-    let (mut lo, mut hi) = (min, MAX_PRIMS);
-    while lo < hi {
-        let mid = lo + (hi - lo).div_ceil(2);
-        if rtree_layout(mid, p).total_bytes <= bytes {
-            lo = mid;
-        } else {
-            hi = mid - 1;
-        }
-    }
-    Some(lo)
 }
 
 /// Hierarchy and scratch layouts for `n` primitives (an R-tree's capacity).
 fn layouts(n: usize, k: &Kind) -> Result<(BvhArenaLayout, BvhScratchLayout), CorayStatus> {
+    let too_many = CorayStatus::TooManyPrimitives;
     if n >= MAX_PRIMS {
-        return Err(CorayStatus::TooManyPrimitives);
+        return Err(too_many);
     }
-    let (arena, scratch) = match k {
+    match k {
         Kind::Static(b, _) => {
             let r = bvh::requirements(n, *b);
-            (
-                BvhArenaLayout::of(r.nodes, r.refs),
-                BvhScratchLayout::of(&r),
-            )
+            Ok((
+                BvhArenaLayout::of(r.nodes, r.refs).ok_or(too_many)?,
+                BvhScratchLayout::of(&r).ok_or(too_many)?,
+            ))
         }
         Kind::RTree(p) => {
             // The arena for `n` may hold a few more (the formula moves in
             // steps): scratch for deletes covers all the arena will take.
-            let arena = rtree_layout(n, p);
+            let arena = BvhArenaLayout::rtree(n, p).ok_or(too_many)?;
             let links = bvh::BvhRequirements {
-                links: rtree_fit(arena.total_bytes, n, p).unwrap_or(n),
+                links: BvhArenaLayout::rtree_fit(arena.total_bytes, n, p).unwrap_or(n),
                 ..Default::default()
             };
-            (arena, BvhScratchLayout::of(&links))
+            Ok((arena, BvhScratchLayout::of(&links).ok_or(too_many)?))
         }
-    };
-    if arena.total_bytes > u32::MAX as usize {
-        return Err(CorayStatus::TooManyPrimitives);
     }
-    Ok((arena, scratch))
 }
 
-/// Arena sizes for a hierarchy over `prim_count` primitives with `params`
-/// (for an R-tree, `prim_count` is the most objects it will hold).
+/// Stack entries a hierarchy of `n` primitives may need: a binary one is
+/// at most `n - 1` deep, an R-tree at most `log_m(n) + 1`.
+fn stack_bound(n: usize, k: &Kind) -> usize {
+    match k {
+        Kind::Static(..) => n.max(1),
+        Kind::RTree(p) => {
+            let (m, big) = (p.min_children.max(2) as usize, p.max_children as usize);
+            let mut levels = 1;
+            let mut reach = 1usize;
+            while reach < n {
+                reach = reach.saturating_mul(m);
+                levels += 1;
+            }
+            levels * (big - 1) + 1
+        }
+    }
+}
+
+/// Arena, scratch and stack sizes for a hierarchy over `prim_count`
+/// primitives with `params` (for an R-tree, `prim_count` is the most
+/// objects it will hold). Static builders need exactly `arena_bytes`.
 ///
-/// # Safety
-/// `params` and `out` are NULL or valid pointers to their types.
+/// Safety: `params` and `out` are NULL or valid pointers to their types.
 #[no_mangle]
 pub unsafe extern "C" fn coray_bvh_requirements(
     prim_count: usize,
     params: *const CorayBvhParams,
-    out: *mut CorayBvhRequirements,
+    out: *mut CorayRequirements,
 ) -> CorayStatus {
     guard(|| {
-        // SAFETY: the caller passes a valid params pointer or NULL.
-        let k = unsafe { carve::input_ref(params)? }.to_core()?;
-        let (a, s) = layouts(prim_count, &k)?;
-        // SAFETY: the caller passes a valid, writable out pointer or NULL.
-        *unsafe { carve::output(out, 1)? }
-            .first_mut()
-            .ok_or(CorayStatus::NullPointer)? = CorayBvhRequirements {
-            bvh_bytes: a.total_bytes,
-            scratch_bytes: s.total_bytes.max(1),
+        let mut regions = Regions::new();
+        // SAFETY: the caller passes valid pointers or NULL.
+        let (k, out) = unsafe {
+            (
+                carve::read(params)?.to_core()?,
+                Out::new(out, false, &mut regions)?,
+            )
         };
+        let (a, s) = layouts(prim_count, &k)?;
+        out.write(CorayRequirements {
+            struct_size: 0,
+            arena_min_bytes: a.total_bytes,
+            arena_bytes: a.total_bytes,
+            scratch_min_bytes: s.total_bytes,
+            scratch_bytes: s.total_bytes,
+            stack_bytes: stack_bound(prim_count, &k) * size_of::<BvhStackItem>(),
+        });
         Ok(())
     })
 }
 
-/// Writes `bytes` to `*needed` when it is a usable pointer; the status.
-pub(crate) fn too_small(needed: *mut usize, bytes: usize) -> Result<(), CorayStatus> {
-    if !needed.is_null() && (needed as usize).is_multiple_of(core::mem::align_of::<usize>()) {
-        // SAFETY: non-null and aligned; the caller promises it writable.
-        unsafe { *needed = bytes };
-    }
-    Err(CorayStatus::ArenaTooSmall)
-}
-
-/// Builds a hierarchy over `scene` into `bvh_arena`, with `scratch_arena`
-/// as scratch (free again when this returns).
+/// Builds a hierarchy over `scene` into `arena`, with `scratch` as scratch
+/// (free again when this returns).
 ///
-/// Both arenas are 16-byte aligned and do not overlap. Static builders need
-/// `bvh_bytes` from [`coray_bvh_requirements`]; an R-tree takes any arena
-/// from the size for the scene's primitive count up, and uses the rest as
-/// room for later inserts. On `CORAY_STATUS_ARENA_TOO_SMALL`,
-/// `*needed_bytes` (if not NULL) receives the size the arena that was too
-/// small needs. Degenerate primitives stay out of the hierarchy (never hit).
+/// Both are 16-byte aligned and overlap neither each other nor the scene.
+/// Static builders need `arena_bytes` of the requirements; an R-tree takes
+/// any arena from the size for the scene's primitive count up and uses the
+/// rest as room for later inserts. On `CORAY_STATUS_ARENA_TOO_SMALL`,
+/// `*needed_bytes` (if not NULL) receives the size the arena or scratch
+/// that was too small needs. Degenerate primitives stay out (never hit).
+/// The part of the arena the layout covers is written entirely; bytes past
+/// it are not touched.
 ///
-/// # Safety
-/// Every pointer is NULL or valid for its documented size; the arenas are
-/// not read or written by anyone else during the call.
+/// Safety: every pointer is NULL or valid for its documented size; the
+/// arenas are not read or written by anyone else during the call.
 #[no_mangle]
 pub unsafe extern "C" fn coray_bvh_build(
     scene: *const CorayScene,
     params: *const CorayBvhParams,
-    bvh_arena: *mut c_void,
-    bvh_bytes: usize,
-    scratch_arena: *mut c_void,
+    arena: *mut c_void,
+    arena_bytes: usize,
+    scratch: *mut c_void,
     scratch_bytes: usize,
     needed_bytes: *mut usize,
 ) -> CorayStatus {
     guard(|| {
+        let mut regions = Regions::new();
         // SAFETY: the caller passes valid scene and params pointers or NULL.
-        let (scene, p) = unsafe { (carve::scene(scene)?, carve::input_ref(params)?) };
+        let (scene, p) = unsafe { (carve::scene(scene, &mut regions)?, carve::read(params)?) };
         let kind = p.to_core()?;
-        let (base, sbase) = (bvh_arena.cast::<u8>(), scratch_arena.cast::<u8>());
+        let needed = OutValue::new(needed_bytes, true, &mut regions)?;
+        let (base, sbase) = (arena.cast::<u8>(), scratch.cast::<u8>());
         check_arena(base)?;
         check_arena(sbase)?;
         let n = scene.prim_count();
         // An R-tree that starts empty needs room for no object yet.
         let n_min = if p.start_empty == 1 { 0 } else { n };
-        let (min_arena, scratch) = layouts(n_min, &kind)?;
-        let (arena, capacity) = match &kind {
-            Kind::Static(..) if bvh_bytes < min_arena.total_bytes => {
-                return too_small(needed_bytes, min_arena.total_bytes)
+        let (min_arena, scratch_l) = layouts(n_min, &kind)?;
+        let (arena_l, capacity) = match &kind {
+            Kind::Static(..) if arena_bytes < min_arena.total_bytes => {
+                needed.write(min_arena.total_bytes);
+                return Err(CorayStatus::ArenaTooSmall);
             }
             Kind::Static(..) => (min_arena, n),
             Kind::RTree(rp) => {
-                let bytes = bvh_bytes.min(u32::MAX as usize);
-                let Some(cap) = rtree_fit(bytes, n_min, rp) else {
-                    return too_small(needed_bytes, min_arena.total_bytes);
+                let bytes = arena_bytes.min(coray::limits::MAX_ARENA_BYTES);
+                let Some(cap) = BvhArenaLayout::rtree_fit(bytes, n_min, rp) else {
+                    needed.write(min_arena.total_bytes);
+                    return Err(CorayStatus::ArenaTooSmall);
                 };
-                (rtree_layout(cap, rp), cap)
+                let l = BvhArenaLayout::rtree(cap, rp).ok_or(CorayStatus::TooManyPrimitives)?;
+                (l, cap)
             }
         };
-        if scratch_bytes < scratch.total_bytes {
-            return too_small(needed_bytes, scratch.total_bytes);
+        if scratch_bytes < scratch_l.total_bytes {
+            needed.write(scratch_l.total_bytes);
+            return Err(CorayStatus::ArenaTooSmall);
         }
-        let (a0, s0) = (base as usize, sbase as usize);
-        if a0 < s0 + scratch.total_bytes && s0 < a0 + arena.total_bytes {
-            return Err(CorayStatus::InvalidParameter);
-        }
+        regions
+            .add(base, arena_l.total_bytes, true)
+            .add(sbase, scratch_l.total_bytes, true)
+            .check()?;
         scene.check()?;
-        let c = &scratch.counts;
-        // SAFETY: both arenas passed check_arena; each layout lies within its
-        // arena (checked above), its parts do not overlap (layout formulas)
-        // and the arenas do not overlap each other (checked above); the
-        // caller gives us both exclusively for the call.
+        let c = &scratch_l.counts;
+        // SAFETY: both arenas passed check_arena; each layout lies within
+        // its arena (checked above), its parts do not overlap (layout
+        // formulas) and the arenas overlap neither each other nor the
+        // scene (Regions); the caller lends both exclusively for the call.
         let (header, nodes, refs, boxes, keys, links, clusters) = unsafe {
+            carve::zero(base, arena_l.total_bytes);
             (
-                slice_mut::<BvhArenaHeader>(base, 0, 1),
-                slice_mut::<BvhNode>(base, arena.nodes_offset, arena.nodes),
-                slice_mut::<u32>(base, arena.refs_offset, arena.refs),
-                slice_mut::<Aabb>(sbase, 0, c.boxes),
-                slice_mut::<f32>(sbase, scratch.keys_offset, c.keys),
-                slice_mut::<u32>(sbase, scratch.links_offset, c.links),
-                slice_mut::<BvhNode>(sbase, scratch.clusters_offset, c.clusters),
+                carve::arena_mut::<BvhArenaHeader>(base, 0, 1),
+                carve::arena_mut::<BvhNode>(base, arena_l.nodes_offset, arena_l.nodes),
+                carve::arena_mut::<u32>(base, arena_l.refs_offset, arena_l.refs),
+                carve::arena_mut::<Aabb>(sbase, 0, c.boxes),
+                carve::arena_mut::<f32>(sbase, scratch_l.keys_offset, c.keys),
+                carve::arena_mut::<u32>(sbase, scratch_l.links_offset, c.links),
+                carve::arena_mut::<BvhNode>(sbase, scratch_l.clusters_offset, c.clusters),
             )
         };
         let mut h = BvhArenaHeader {
             magic: BVH_MAGIC,
             version: BVH_VERSION,
-            builder: p.builder,
             scene_counts: scene_counts(&scene),
-            layout_bytes: arena.total_bytes as u32,
-            nodes_cap: arena.nodes as u32,
-            refs_cap: arena.refs as u32,
+            layout_bytes: arena_l.total_bytes as u32,
+            nodes_cap: arena_l.nodes as u32,
+            refs_cap: arena_l.refs as u32,
             capacity: capacity as u32,
             ..Default::default()
         };
@@ -399,7 +381,8 @@ pub unsafe extern "C" fn coray_bvh_build(
                     clusters,
                 };
                 let t = bvh::build(&scene, b, leaf_size, storage, scratch)?;
-                h.info = t.info;
+                h.builder = code::of_static(b);
+                h.info = *t.info();
             }
             Kind::RTree(rp) => {
                 let t = if p.start_empty == 1 {
@@ -407,7 +390,8 @@ pub unsafe extern "C" fn coray_bvh_build(
                 } else {
                     RTree::build(&scene, rp, nodes, refs, links)?
                 };
-                put_rtree(&mut h, &t);
+                h.builder = code::of_rtree(&rp);
+                h.set_rtree(&rp, t.state(), *t.bvh().info());
             }
         }
         header[0] = h;
@@ -423,28 +407,23 @@ pub(crate) fn scene_counts(s: &Scene) -> [u32; 3] {
     ]
 }
 
-/// Records an R-tree's parameters, state and shape in its header.
-fn put_rtree(h: &mut BvhArenaHeader, t: &RTree) {
-    let p = t.params();
-    h.max_children = p.max_children;
-    h.min_children = p.min_children;
-    h.rtree_flags = if p.split == Split::RStar {
-        BVH_FLAG_RSTAR
-    } else {
-        0
-    } | if p.forced_reinsert {
-        BVH_FLAG_REINSERT
-    } else {
-        0
-    };
-    h.rtree = t.state();
-    h.info = t.bvh().info;
+/// Errors unless `scene` has the counts the arena was built on.
+pub(crate) fn check_scene(counts: [u32; 3], scene: &Scene) -> Result<(), CorayStatus> {
+    let n = |x: usize| u32::try_from(x).ok();
+    let have = [
+        n(scene.triangles.len()),
+        n(scene.spheres.len()),
+        n(scene.cones.len()),
+    ];
+    if have != counts.map(Some) {
+        return Err(CorayStatus::SceneMismatch);
+    }
+    Ok(())
 }
 
-/// The header of the arena, checked in O(1) (magic, version, layout).
+/// The header of a hierarchy arena, checked in O(1).
 ///
-/// # Safety
-/// `base` is NULL or valid for reads of `bytes` bytes.
+/// Safety: `base` is NULL or readable for `bytes` bytes.
 unsafe fn header(
     base: *const u8,
     bytes: usize,
@@ -454,404 +433,443 @@ unsafe fn header(
         return Err(CorayStatus::CorruptArena);
     }
     // SAFETY: aligned, readable for bytes >= BVH_HEADER_BYTES >= one header.
-    let h = unsafe { slice_ref::<BvhArenaHeader>(base, 0, 1)[0] };
+    let h = unsafe { carve::arena_ref::<BvhArenaHeader>(base, 0, 1)[0] };
     let l = h.layout(bytes)?;
+    h.rtree_params()?;
+    if code::to_static(h.builder).is_none() && !code::is_rtree(h.builder) {
+        return Err(CorayStatus::CorruptArena);
+    }
     Ok((h, l))
 }
 
-/// Errors unless `scene` has the counts the hierarchy was built on.
-fn check_scene(h: &BvhArenaHeader, scene: &Scene) -> Result<(), CorayStatus> {
-    if scene_counts(scene) != h.scene_counts || scene.prim_count() > u32::MAX as usize {
-        return Err(CorayStatus::SceneMismatch);
-    }
-    Ok(())
+/// Opens the hierarchy in `arena` with the scene it was built on: O(1)
+/// checks, then `*out` is the handle every trace, info and validate call
+/// takes. The arena and the scene's arrays stay in place and unchanged
+/// while the handle is used (an R-tree's own inserts and deletes aside).
+/// Validate an arena from untrusted storage once, as for a kd-tree.
+///
+/// Safety: `arena` is NULL or readable for `arena_bytes`; `scene` and `out`
+/// NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn coray_bvh_open(
+    arena: *const c_void,
+    arena_bytes: usize,
+    scene: *const CorayScene,
+    out: *mut CorayBvh,
+) -> CorayStatus {
+    guard(|| {
+        let mut regions = Regions::new();
+        // SAFETY: forwarded caller contract.
+        let scene = unsafe { carve::scene(scene, &mut regions)? };
+        carve::check_array(out, 1)?;
+        regions.add(out, size_of::<CorayBvh>(), true);
+        let base = arena.cast::<u8>();
+        // SAFETY: forwarded contract.
+        let (h, l) = unsafe { header(base, arena_bytes)? };
+        regions.add(base, arena_bytes, false).check()?;
+        check_scene(h.scene_counts, &scene)?;
+        let mut hd = Handle {
+            kind: KIND_BVH,
+            arena: base as usize,
+            arena_bytes: l.total_bytes,
+            ..Handle::default()
+        };
+        hd.set_scene(&scene);
+        hd.parts[0] = (0, 1);
+        hd.parts[1] = (l.nodes_offset, l.nodes);
+        hd.parts[2] = (l.refs_offset, l.refs);
+        // SAFETY: the handle describes the arena just checked, readable.
+        unsafe { view_of(&hd, scene)? };
+        // SAFETY: out checked non-null, aligned, disjoint from the arena.
+        unsafe { out.write(CorayBvh { opaque: hd.words() }) };
+        Ok(())
+    })
 }
 
-/// The hierarchy in an arena, for reading.
+/// The header and hierarchy a handle describes, over `scene`.
 ///
-/// # Safety
-/// `arena` is NULL or valid for reads of `bytes` bytes that nobody writes
-/// during `'a`.
-unsafe fn view<'a>(
-    arena: *const c_void,
-    bytes: usize,
+/// Safety: the handle's arena is readable and unchanged during `'a`.
+unsafe fn view_of<'a>(
+    h: &Handle,
     scene: Scene<'a>,
 ) -> Result<(BvhArenaHeader, Bvh<'a>), CorayStatus> {
-    let base = arena.cast::<u8>();
-    // SAFETY: forwarded contract.
-    let (h, l) = unsafe { header(base, bytes)? };
-    check_scene(&h, &scene)?;
-    // SAFETY: the layout lies within `bytes` (checked by layout()), its
-    // offsets are multiples of 16, and the arena is only read.
-    let (nodes, refs) = unsafe {
-        (
-            slice_ref::<BvhNode>(base, l.nodes_offset, l.nodes),
-            slice_ref::<u32>(base, l.refs_offset, l.refs),
-        )
-    };
-    Ok((
-        h,
-        Bvh {
-            scene,
-            nodes,
-            refs,
-            info: h.info,
-        },
-    ))
+    // SAFETY: the handle's parts lie within its arena (Handle::part
+    // checks), readable by the caller's contract.
+    unsafe {
+        let header = h.part::<BvhArenaHeader>(0)?[0];
+        let b = Bvh::from_parts(scene, h.part(1)?, h.part(2)?, header.info)?;
+        Ok((header, b))
+    }
 }
 
-/// The R-tree parameters a header records, or `InvalidParameter` for a
-/// static hierarchy (which cannot change).
-fn rtree_params(h: &BvhArenaHeader) -> Result<RTreeParams, CorayStatus> {
-    if h.builder != CORAY_BVH_RTREE && h.builder != CORAY_BVH_RSTAR {
-        return Err(CorayStatus::InvalidParameter);
+/// The hierarchy behind a caller's handle, its buffers noted in `regions`.
+///
+/// Safety: `t` is NULL or a handle `coray_bvh_open` filled, whose arena
+/// and scene are still in place and unchanged during `'a`.
+unsafe fn open<'a>(
+    t: *const CorayBvh,
+    regions: &mut Regions,
+) -> Result<(BvhArenaHeader, Bvh<'a>), CorayStatus> {
+    // SAFETY: forwarded contract.
+    unsafe {
+        let h = handle::read(t.cast(), KIND_BVH, regions)?;
+        regions.add(h.arena as *const u8, h.arena_bytes, false);
+        let scene = h.scene(regions);
+        view_of(&h, scene)
     }
-    Ok(RTreeParams {
-        split: if h.rtree_flags & BVH_FLAG_RSTAR != 0 {
-            Split::RStar
-        } else {
-            Split::Quadratic
-        },
-        max_children: h.max_children,
-        min_children: h.min_children,
-        order: InsertOrder::Scene,
-        forced_reinsert: h.rtree_flags & BVH_FLAG_REINSERT != 0,
+}
+
+/// What the hierarchy holds, from its header (O(1)).
+///
+/// Safety: `bvh` is a handle `coray_bvh_open` filled; `out` NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn coray_bvh_info(
+    bvh: *const CorayBvh,
+    out: *mut CorayBvhInfo,
+) -> CorayStatus {
+    guard(|| {
+        let mut regions = Regions::new();
+        // SAFETY: forwarded caller contract.
+        let ((h, b), out) = unsafe {
+            (
+                open(bvh, &mut regions)?,
+                Out::new(out, false, &mut regions)?,
+            )
+        };
+        regions.check()?;
+        let i = b.info();
+        let root = b
+            .parts()
+            .0
+            .get(i.root as usize)
+            .copied()
+            .unwrap_or_default();
+        out.write(CorayBvhInfo {
+            struct_size: 0,
+            builder: h.builder,
+            node_count: i.node_count,
+            leaf_count: i.leaf_count,
+            ref_count: i.ref_count,
+            depth: i.depth,
+            max_children: i.max_children,
+            capacity: h.capacity,
+            arena_bytes_used: h.layout_bytes as usize,
+            stack_bytes: b.stack_len().saturating_mul(size_of::<BvhStackItem>()),
+            bounds_min: root.min,
+            bounds_max: root.max,
+        });
+        Ok(())
+    })
+}
+
+/// Checks every structural invariant of the hierarchy against its scene,
+/// in time linear in the hierarchy, never crashing on any bytes: boxes are
+/// exact unions, indices in range, counts, depth and reference digest as
+/// recorded, and for R-trees the fill rules and free lists.
+/// `CORAY_STATUS_CORRUPT_ARENA` when anything is wrong. Once it accepts an
+/// arena, every call on it gives the results of a clean build. `stack` is
+/// the traversal stack (`stack_bytes` of the info); `out` may be NULL.
+///
+/// Safety: as `coray_bvh_info`; `stack` writable for `stack_bytes`.
+#[no_mangle]
+pub unsafe extern "C" fn coray_bvh_validate(
+    bvh: *const CorayBvh,
+    stack: *mut c_void,
+    stack_bytes: usize,
+    out: *mut CorayShape,
+) -> CorayStatus {
+    guard(|| {
+        let mut regions = Regions::new();
+        // SAFETY: forwarded caller contract.
+        let ((h, b), out) =
+            unsafe { (open(bvh, &mut regions)?, Out::new(out, true, &mut regions)?) };
+        // SAFETY: forwarded caller contract: a writable stack.
+        let stk = unsafe {
+            carve::stack::<BvhStackItem>(stack, stack_bytes, b.stack_len(), &mut regions)?
+        };
+        regions.check()?;
+        let s = match h.rtree_params()? {
+            Some(p) => {
+                let l = BvhArenaLayout::rtree(h.capacity as usize, &p);
+                if l.is_none_or(|l| {
+                    (l.nodes, l.refs) != (h.nodes_cap as usize, h.refs_cap as usize)
+                }) {
+                    return Err(CorayStatus::CorruptArena);
+                }
+                bvh::validate_rtree(&b, &p, &h.rtree, stk)?
+            }
+            None => {
+                let i = b.info();
+                if h.capacity != i.ref_count || i.max_children != 2 {
+                    return Err(CorayStatus::CorruptArena);
+                }
+                b.validate(None, stk)?
+            }
+        };
+        out.write(CorayShape {
+            struct_size: 0,
+            node_count: s.nodes,
+            leaf_count: s.leaves,
+            empty_leaf_count: 0,
+            ref_count: s.refs,
+            depth: s.depth,
+        });
+        Ok(())
     })
 }
 
 /// The R-tree in an arena, for changing, with its header to write back.
 ///
-/// # Safety
-/// `arena` is NULL or valid for reads and writes of `bytes` bytes that
-/// nobody else touches during `'a`.
+/// Safety: `arena` is NULL or valid for reads and writes of `bytes` bytes
+/// that nobody else touches during `'a`.
 unsafe fn rtree_mut<'a>(
     arena: *mut c_void,
     bytes: usize,
     scene: Scene<'a>,
+    regions: &mut Regions,
 ) -> Result<(&'a mut BvhArenaHeader, RTree<'a>), CorayStatus> {
     let base = arena.cast::<u8>();
     // SAFETY: forwarded contract.
     let (h, l) = unsafe { header(base, bytes)? };
-    check_scene(&h, &scene)?;
-    let p = rtree_params(&h)?;
+    check_scene(h.scene_counts, &scene)?;
+    let p = h.rtree_params()?.ok_or(CorayStatus::InvalidParameter)?;
+    regions.add(base, l.total_bytes, true).check()?;
     // SAFETY: header, nodes and refs are disjoint parts of the checked
     // layout (header below BVH_HEADER_BYTES, then 16-aligned parts), all
-    // within `bytes`; the caller gives us the arena exclusively.
+    // within `bytes`, apart from the call's other buffers (Regions); the
+    // caller gives us the arena exclusively.
     let (hd, nodes, refs) = unsafe {
         (
-            &mut slice_mut::<BvhArenaHeader>(base, 0, 1)[0],
-            slice_mut::<BvhNode>(base, l.nodes_offset, l.nodes),
-            slice_mut::<u32>(base, l.refs_offset, l.refs),
+            &mut carve::arena_mut::<BvhArenaHeader>(base, 0, 1)[0],
+            carve::arena_mut::<BvhNode>(base, l.nodes_offset, l.nodes),
+            carve::arena_mut::<u32>(base, l.refs_offset, l.refs),
         )
     };
     let t = RTree::resume(&scene, p, nodes, refs, h.rtree)?;
     Ok((hd, t))
 }
 
-/// What the hierarchy in `bvh_arena` holds, from its header (O(1)).
+/// Inserts primitive `prim_id` of geometry `geom_id` into the R-tree in
+/// `arena`. A degenerate primitive is accepted and not stored.
+/// `CORAY_STATUS_ARENA_TOO_SMALL` when the arena holds
+/// `CorayBvhInfo.capacity` objects: the tree is then unchanged (build
+/// again in a larger arena). `CORAY_STATUS_INVALID_PARAMETER` for a static
+/// hierarchy or a primitive the scene lacks. Inserting an object that the
+/// tree holds already stores it twice. On a tree that validates, an insert
+/// either completes or changes nothing; on a broken one it may stop with
+/// `CORAY_STATUS_CORRUPT_ARENA`. No trace may run on the arena meanwhile.
 ///
-/// # Safety
-/// `bvh_arena` is valid for reads of `bvh_bytes`; `out` is NULL or writable.
-#[no_mangle]
-pub unsafe extern "C" fn coray_bvh_info(
-    bvh_arena: *const c_void,
-    bvh_bytes: usize,
-    out: *mut CorayBvhInfo,
-) -> CorayStatus {
-    guard(|| {
-        let base = bvh_arena.cast::<u8>();
-        // SAFETY: forwarded contract.
-        let (h, l) = unsafe { header(base, bvh_bytes)? };
-        let i = &h.info;
-        // SAFETY: root < nodes_cap (checked by layout()); read only.
-        let root = unsafe { slice_ref::<BvhNode>(base, l.nodes_offset, l.nodes)[i.root as usize] };
-        let stack = Bvh {
-            scene: Scene::default(),
-            nodes: &[],
-            refs: &[],
-            info: *i,
-        }
-        .stack_len();
-        let info = CorayBvhInfo {
-            builder: h.builder,
-            node_count: i.node_count,
-            leaf_count: i.leaf_count,
-            object_count: i.ref_count,
-            depth: i.depth,
-            max_children: i.max_children,
-            capacity: h.capacity,
-            arena_bytes_used: l.total_bytes,
-            stack_bytes: stack * size_of::<BvhStackItem>(),
-            bounds_min: root.min,
-            bounds_max: root.max,
-        };
-        // SAFETY: out is NULL or writable (caller's contract).
-        *unsafe { carve::output(out, 1)? }
-            .first_mut()
-            .ok_or(CorayStatus::NullPointer)? = info;
-        Ok(())
-    })
-}
-
-/// Checks every structural invariant of the hierarchy against `scene`
-/// (O(size)): boxes are exact unions, indices in range, counts and depth as
-/// recorded; for R-trees also the fill rules and free lists. Run it on an
-/// arena loaded from untrusted storage before tracing or changing it.
-/// `CORAY_STATUS_CORRUPT_ARENA` when anything is wrong; `out` may be NULL.
-///
-/// # Safety
-/// As [`coray_bvh_info`]; `scene` is valid.
-#[no_mangle]
-pub unsafe extern "C" fn coray_bvh_validate(
-    bvh_arena: *const c_void,
-    bvh_bytes: usize,
-    scene: *const CorayScene,
-    out: *mut CorayBvhTreeStats,
-) -> CorayStatus {
-    guard(|| {
-        // SAFETY: forwarded caller contract.
-        let (h, t) = unsafe { view(bvh_arena, bvh_bytes, carve::scene(scene)?)? };
-        let s = match rtree_params(&h) {
-            Ok(p) => {
-                let l = rtree_layout(h.capacity as usize, &p);
-                if (l.nodes, l.refs) != (h.nodes_cap as usize, h.refs_cap as usize) {
-                    return Err(CorayStatus::CorruptArena);
-                }
-                bvh::validate_rtree(&t, &p, &h.rtree)?
-            }
-            Err(_) if h.capacity != t.info.ref_count => return Err(CorayStatus::CorruptArena),
-            Err(_) if t.info.max_children != 2 => return Err(CorayStatus::CorruptArena),
-            Err(_) => t.validate(None)?,
-        };
-        if !out.is_null() {
-            // SAFETY: non-null; writable by the caller's contract.
-            *unsafe { carve::output(out, 1)? }
-                .first_mut()
-                .ok_or(CorayStatus::NullPointer)? = CorayBvhTreeStats {
-                node_count: s.nodes,
-                leaf_count: s.leaves,
-                ref_count: s.refs,
-                depth: s.depth,
-            };
-        }
-        Ok(())
-    })
-}
-
-/// Inserts primitive `prim_index` (0-based over triangles, then spheres,
-/// then cones) into the R-tree in `bvh_arena`. A degenerate primitive is
-/// accepted and not stored. `CORAY_STATUS_ARENA_TOO_SMALL` when the arena
-/// holds `CorayBvhInfo.capacity` objects: the tree is then unchanged
-/// (build again in a larger arena). `CORAY_STATUS_INVALID_PARAMETER` for a
-/// static hierarchy or an index past the scene. Inserting an object that the
-/// tree holds already stores it twice.
-///
-/// # Safety
-/// `bvh_arena` is valid for reads and writes of `bvh_bytes` bytes that
-/// nobody else touches during the call; `scene` is valid.
+/// Safety: `arena` is valid for reads and writes of `arena_bytes` bytes
+/// that nobody else touches during the call; `scene` is valid.
 #[no_mangle]
 pub unsafe extern "C" fn coray_bvh_insert(
-    bvh_arena: *mut c_void,
-    bvh_bytes: usize,
+    arena: *mut c_void,
+    arena_bytes: usize,
     scene: *const CorayScene,
-    prim_index: u32,
+    geom_id: CorayGeomId,
+    prim_id: u32,
 ) -> CorayStatus {
     guard(|| {
+        let mut regions = Regions::new();
         // SAFETY: forwarded caller contract.
-        let (hd, mut t) = unsafe { rtree_mut(bvh_arena, bvh_bytes, carve::scene(scene)?)? };
-        if t.len() >= hd.capacity && (prim_index as usize) < t.bvh().scene.prim_count() {
+        let scene = unsafe { carve::scene(scene, &mut regions)? };
+        let prim = global_prim(&scene, geom_id, prim_id).ok_or(CorayStatus::InvalidParameter)?;
+        // SAFETY: forwarded caller contract.
+        let (hd, mut t) = unsafe { rtree_mut(arena, arena_bytes, scene, &mut regions)? };
+        if t.len() >= hd.capacity {
             return Err(CorayStatus::ArenaTooSmall);
         }
-        t.insert(prim_index)?;
-        put_rtree(hd, &t);
+        t.insert(prim)?;
+        let p = t.params();
+        hd.set_rtree(&p, t.state(), *t.bvh().info());
         Ok(())
     })
 }
 
-/// Removes primitive `prim_index` from the R-tree in `bvh_arena`;
-/// `*deleted` (if not NULL) receives 1 when it was there, else 0. Nodes left
-/// underfull are dissolved and their objects inserted again, which needs
-/// `scratch_bytes` from [`coray_bvh_requirements`] in `scratch_arena`
-/// (16-byte aligned, not overlapping the tree).
+/// Removes primitive `prim_id` of geometry `geom_id` from the R-tree in
+/// `arena`; `*deleted` (if not NULL) receives 1 when it was there, else 0.
+/// Nodes left underfull are dissolved and their objects inserted again,
+/// which needs the requirements' `scratch_bytes` in `scratch` (16-byte
+/// aligned, not overlapping the tree). Otherwise as `coray_bvh_insert`.
 ///
-/// # Safety
-/// As [`coray_bvh_insert`]; `scratch_arena` is valid for writes of
+/// Safety: as `coray_bvh_insert`; `scratch` is writable for
 /// `scratch_bytes`; `deleted` is NULL or writable.
 #[no_mangle]
 pub unsafe extern "C" fn coray_bvh_delete(
-    bvh_arena: *mut c_void,
-    bvh_bytes: usize,
+    arena: *mut c_void,
+    arena_bytes: usize,
     scene: *const CorayScene,
-    prim_index: u32,
-    scratch_arena: *mut c_void,
+    geom_id: CorayGeomId,
+    prim_id: u32,
+    scratch: *mut c_void,
     scratch_bytes: usize,
     deleted: *mut u8,
 ) -> CorayStatus {
     guard(|| {
-        let sbase = scratch_arena.cast::<u8>();
+        let mut regions = Regions::new();
+        // SAFETY: forwarded caller contract.
+        let scene = unsafe { carve::scene(scene, &mut regions)? };
+        let prim = global_prim(&scene, geom_id, prim_id).ok_or(CorayStatus::InvalidParameter)?;
+        let deleted = OutValue::new(deleted, true, &mut regions)?;
+        let sbase = scratch.cast::<u8>();
         check_arena(sbase)?;
         // SAFETY: forwarded caller contract.
-        let (hd, mut t) = unsafe { rtree_mut(bvh_arena, bvh_bytes, carve::scene(scene)?)? };
+        let (hd, mut t) = unsafe { rtree_mut(arena, arena_bytes, scene, &mut regions)? };
         let need = t.len() as usize;
         if scratch_bytes < need * 4 {
             return Err(CorayStatus::ArenaTooSmall);
         }
-        let (a0, s0) = (bvh_arena as usize, sbase as usize);
-        if a0 < s0 + need * 4 && s0 < a0 + bvh_bytes {
-            return Err(CorayStatus::InvalidParameter);
-        }
+        regions.add(sbase, need * 4, true).check()?;
         // SAFETY: aligned (checked), `need * 4 <= scratch_bytes` bytes the
-        // caller lends exclusively, disjoint from the tree arena (checked).
-        let orphans = unsafe { slice_mut::<u32>(sbase, 0, need) };
-        let was = t.delete(prim_index, orphans)?;
-        put_rtree(hd, &t);
-        if !deleted.is_null() {
-            // SAFETY: non-null; writable by the caller's contract.
-            unsafe { *deleted = was as u8 };
-        }
+        // caller lends exclusively, disjoint from the tree (Regions).
+        let orphans = unsafe { carve::arena_mut::<u32>(sbase, 0, need) };
+        let was = t.delete(prim, orphans)?;
+        let p = t.params();
+        hd.set_rtree(&p, t.state(), *t.bvh().info());
+        deleted.write(was as u8);
         Ok(())
     })
 }
 
-/// The caller's traversal stack, at least the hierarchy's `stack_bytes`.
+/// The body of every trace entry point: checks the handle, the arrays, the
+/// stack and the statistics first, then writes `answer` for each ray.
 ///
-/// # Safety
-/// `stack` is NULL or valid for writes of `bytes` bytes during `'a`.
-pub(crate) unsafe fn stack<'a>(
-    t: &Bvh,
-    stack: *mut c_void,
-    bytes: usize,
-) -> Result<&'a mut [BvhStackItem], CorayStatus> {
-    let need = t.stack_len();
-    if bytes < need * size_of::<BvhStackItem>() {
-        return Err(CorayStatus::ArenaTooSmall);
-    }
-    // SAFETY: forwarded contract; output() checks null and alignment.
-    unsafe { carve::output(stack.cast::<BvhStackItem>(), need) }
-}
-
-fn put_stats(out: *mut CorayBvhStats, s: &BvhStats) -> Result<(), CorayStatus> {
-    if !out.is_null() {
-        // SAFETY: non-null; the caller promises a writable CorayBvhStats.
-        if let Some(o) = unsafe { carve::output(out, 1)? }.first_mut() {
-            *o = CorayBvhStats {
-                trace: s.trace.into(),
-                box_tests: s.box_tests,
-                box_cost: s.box_cost,
-                prim_cost: s.prim_cost,
-            };
-        }
-    }
-    Ok(())
-}
-
-/// Closest hits of `count` rays: `hits[i]` for `rays[i]`. `stack` is the
-/// caller's traversal stack of `stack_bytes` (at least
-/// `CorayBvhInfo.stack_bytes`, 4-byte aligned; one per thread). `stats` may
-/// be NULL. Many threads may trace one hierarchy at once, each with its
-/// own stack, while nobody changes it.
-///
-/// # Safety
-/// `rays` and `hits` hold `count` elements (may be NULL when `count` is 0);
-/// the arena and scene as in [`coray_bvh_validate`]; `stack` is writable
-/// for `stack_bytes`.
-#[no_mangle]
-pub unsafe extern "C" fn coray_bvh_intersect(
-    bvh_arena: *const c_void,
-    bvh_bytes: usize,
-    scene: *const CorayScene,
-    rays: *const CorayRay,
-    hits: *mut CorayHit,
-    count: usize,
-    stack_mem: *mut c_void,
-    stack_bytes: usize,
-    stats: *mut CorayBvhStats,
-) -> CorayStatus {
-    // SAFETY: forwarded caller contract.
-    unsafe {
-        batch(
-            bvh_arena,
-            bvh_bytes,
-            scene,
-            rays,
-            hits,
-            count,
-            stack_mem,
-            stack_bytes,
-            stats,
-            |t, r, stk, st| t.intersect(r, stk, st).into(),
-        )
-    }
-}
-
-/// Any-hit queries (shadow rays): `occluded[i]` is 1 when something lies on
-/// `rays[i]` within `[tnear, tfar]`, else 0. Otherwise as [`coray_bvh_intersect`].
-///
-/// # Safety
-/// As [`coray_bvh_intersect`], with `occluded` holding `count` bytes.
-#[no_mangle]
-pub unsafe extern "C" fn coray_bvh_occluded(
-    bvh_arena: *const c_void,
-    bvh_bytes: usize,
-    scene: *const CorayScene,
-    rays: *const CorayRay,
-    occluded: *mut u8,
-    count: usize,
-    stack_mem: *mut c_void,
-    stack_bytes: usize,
-    stats: *mut CorayBvhStats,
-) -> CorayStatus {
-    // SAFETY: forwarded caller contract.
-    unsafe {
-        batch(
-            bvh_arena,
-            bvh_bytes,
-            scene,
-            rays,
-            occluded,
-            count,
-            stack_mem,
-            stack_bytes,
-            stats,
-            |t, r, stk, st| t.occluded(r, stk, st) as u8,
-        )
-    }
-}
-
-/// The body of [`coray_bvh_intersect`] and [`coray_bvh_occluded`]: views
-/// the arena, carves rays, answers, stack and statistics, and writes
-/// `answer` for each ray.
-///
-/// # Safety
-/// As [`coray_bvh_intersect`], with `out` holding `count` elements.
+/// Safety: as `coray_bvh_intersect`, with `out` holding `count` `O`s.
 #[allow(clippy::too_many_arguments)]
 unsafe fn batch<O>(
-    bvh_arena: *const c_void,
-    bvh_bytes: usize,
-    scene: *const CorayScene,
+    bvh: *const CorayBvh,
     rays: *const CorayRay,
     out: *mut O,
     count: usize,
-    stack_mem: *mut c_void,
+    stack: *mut c_void,
     stack_bytes: usize,
-    stats: *mut CorayBvhStats,
-    answer: impl Fn(&Bvh, &coray::Ray, &mut [BvhStackItem], &mut BvhStats) -> O,
+    stats: *mut CorayTraceStats,
+    answer: impl Fn(&Bvh, &coray::Ray, &mut [BvhStackItem], &mut TraceStats) -> O,
 ) -> CorayStatus {
     guard(|| {
+        let mut regions = Regions::new();
         // SAFETY: forwarded caller contract for every pointer.
-        let (t, rays, out) = unsafe {
-            (
-                view(bvh_arena, bvh_bytes, carve::scene(scene)?)?.1,
-                carve::input(rays, count)?,
-                carve::output(out, count)?,
-            )
+        let (b, rays, out, stk, stats) = unsafe {
+            let (_, b) = open(bvh, &mut regions)?;
+            let rays = carve::input(rays, count)?;
+            regions.add(rays.as_ptr(), size_of_val(rays), false);
+            let out = carve::output(out, count)?;
+            regions.add(out.as_ptr(), size_of_val(out), true);
+            let need = if count == 0 { 0 } else { b.stack_len() };
+            let stk = carve::stack::<BvhStackItem>(stack, stack_bytes, need, &mut regions)?;
+            (b, rays, out, stk, Out::new(stats, true, &mut regions)?)
         };
-        // SAFETY: forwarded caller contract.
-        let stk = unsafe { stack(&t, stack_mem, stack_bytes)? };
-        let mut st = BvhStats::default();
+        regions.check()?;
+        let mut st = TraceStats::default();
         for (r, o) in rays.iter().zip(out.iter_mut()) {
-            *o = answer(&t, &r.into(), stk, &mut st);
+            *o = answer(&b, &r.into(), stk, &mut st);
         }
-        put_stats(stats, &st)
+        if st.faults > 0 {
+            return Err(CorayStatus::CorruptArena);
+        }
+        stats.write(CorayTraceStats::of(&st));
+        Ok(())
     })
+}
+
+/// Closest hits of `count` rays: `hits[i]` for `rays[i]`. `stack` is the
+/// caller's traversal stack of `stack_bytes` (at least the info's
+/// `stack_bytes`, 16-byte aligned; one per thread). `stats` may be NULL.
+/// Many threads may trace one hierarchy at once, each with its own stack,
+/// while nobody changes it.
+///
+/// Safety: `bvh` as in `coray_bvh_info`; `rays` and `hits` hold `count`
+/// elements (may be NULL when `count` is 0); `stack` is writable for
+/// `stack_bytes`; `stats` NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn coray_bvh_intersect(
+    bvh: *const CorayBvh,
+    rays: *const CorayRay,
+    hits: *mut CorayHit,
+    count: usize,
+    stack: *mut c_void,
+    stack_bytes: usize,
+    stats: *mut CorayTraceStats,
+) -> CorayStatus {
+    // SAFETY: forwarded caller contract.
+    unsafe {
+        batch(
+            bvh,
+            rays,
+            hits,
+            count,
+            stack,
+            stack_bytes,
+            stats,
+            |b, r, s, st| b.intersect(r, s, st).into(),
+        )
+    }
+}
+
+/// `coray_bvh_intersect` for one ray.
+///
+/// Safety: as `coray_bvh_intersect` with `count` 1.
+#[no_mangle]
+pub unsafe extern "C" fn coray_bvh_intersect1(
+    bvh: *const CorayBvh,
+    ray: *const CorayRay,
+    hit: *mut CorayHit,
+    stack: *mut c_void,
+    stack_bytes: usize,
+    stats: *mut CorayTraceStats,
+) -> CorayStatus {
+    if ray.is_null() || hit.is_null() {
+        return CorayStatus::NullPointer;
+    }
+    // SAFETY: forwarded caller contract.
+    unsafe { coray_bvh_intersect(bvh, ray, hit, 1, stack, stack_bytes, stats) }
+}
+
+/// Any-hit queries (shadow rays): `occluded[i]` is 1 when something lies
+/// on `rays[i]` within `[tnear, tfar]`, else 0. Otherwise as
+/// `coray_bvh_intersect`.
+///
+/// Safety: as `coray_bvh_intersect`, with `occluded` holding `count` bytes.
+#[no_mangle]
+pub unsafe extern "C" fn coray_bvh_occluded(
+    bvh: *const CorayBvh,
+    rays: *const CorayRay,
+    occluded: *mut u8,
+    count: usize,
+    stack: *mut c_void,
+    stack_bytes: usize,
+    stats: *mut CorayTraceStats,
+) -> CorayStatus {
+    // SAFETY: forwarded caller contract.
+    unsafe {
+        batch(
+            bvh,
+            rays,
+            occluded,
+            count,
+            stack,
+            stack_bytes,
+            stats,
+            |b, r, s, st| b.occluded(r, s, st) as u8,
+        )
+    }
+}
+
+/// `coray_bvh_occluded` for one ray.
+///
+/// Safety: as `coray_bvh_occluded` with `count` 1.
+#[no_mangle]
+pub unsafe extern "C" fn coray_bvh_occluded1(
+    bvh: *const CorayBvh,
+    ray: *const CorayRay,
+    occluded: *mut u8,
+    stack: *mut c_void,
+    stack_bytes: usize,
+    stats: *mut CorayTraceStats,
+) -> CorayStatus {
+    if ray.is_null() || occluded.is_null() {
+        return CorayStatus::NullPointer;
+    }
+    // SAFETY: forwarded caller contract.
+    unsafe { coray_bvh_occluded(bvh, ray, occluded, 1, stack, stack_bytes, stats) }
 }

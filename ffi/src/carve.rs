@@ -1,49 +1,67 @@
-//! Turning caller pointers into slices: every `unsafe` of coray-ffi that
-//! makes a reference lives here, behind checks of null, alignment and size.
+//! Turning caller pointers into references and slices: every `unsafe` of
+//! coray-ffi that makes one lives here, behind checks of null, alignment,
+//! size and overlap. An entry point checks every pointer it will write
+//! before it does any work ([`Out`], [`Regions`]), so outputs are written
+//! only on success.
 
-use crate::{CorayScene, CorayStatus};
-use coray::arena::{KdArenaHeader, ARENA_ALIGN};
-use coray::kd::{KdEvent, KdLeaf, KdNode, KdRopes};
-use coray::{Cone, Scene, Sphere};
+use crate::CorayStatus;
+use coray::arena::ARENA_ALIGN;
 use core::mem::{align_of, size_of};
 
-/// Types that may be viewed in caller memory: `repr(C)`, only `u32`, `f32`
-/// and `u8` fields, no padding, alignment at most [`ARENA_ALIGN`]. Every bit
-/// pattern is then a value, so reading arbitrary caller bytes as `T` is
-/// defined (whether the values make a tree is `validate`'s question).
+/// Types that may be viewed in caller memory: `repr(C)`, fields of `u8`,
+/// `u32`, `f32` (and arrays of them) only, no padding, alignment at most
+/// [`ARENA_ALIGN`]. Every bit pattern is then a value, so reading
+/// arbitrary caller bytes as `T` is defined (whether the values make a
+/// structure is `validate`'s question).
 ///
 /// # Safety
 /// Implement only for types with exactly those properties.
 pub(crate) unsafe trait Plain: Copy {}
 
-// SAFETY (all impls): each type is repr(C) with u32/f32/u8 fields only; the
-// asserts below prove there is no padding and the alignment is small.
-unsafe impl Plain for KdNode {}
-unsafe impl Plain for KdLeaf {}
-unsafe impl Plain for KdRopes {}
-unsafe impl Plain for KdEvent {}
-unsafe impl Plain for KdArenaHeader {}
+/// C structs that start with `size_t struct_size`, have no field whose
+/// bit patterns are not all valid (integers, floats, pointers), and were
+/// `SIZE_1_0` bytes long in ABI 1.0.
+///
+/// # Safety
+/// Implement only for `repr(C)` types with exactly those properties.
+pub(crate) unsafe trait Versioned: Copy + Default {
+    /// The size of the first published version: the least `struct_size`
+    /// accepted.
+    const SIZE_1_0: usize;
+}
+
+// SAFETY (all impls): each type is repr(C) with u32/f32/u8 fields (or
+// arrays of them) only; the asserts below prove there is no padding and
+// the alignment is at most 16.
+unsafe impl Plain for u8 {}
 unsafe impl Plain for u32 {}
+unsafe impl Plain for f32 {}
+unsafe impl Plain for coray::kd::KdNode {}
+unsafe impl Plain for coray::kd::KdLeaf {}
+unsafe impl Plain for coray::kd::KdRopes {}
+unsafe impl Plain for coray::kd::KdEvent {}
+unsafe impl Plain for coray::kd::KdStackItem {}
+unsafe impl Plain for coray::kd::layout::KdArenaHeader {}
 unsafe impl Plain for coray::lcts::HistoryRecord {}
 unsafe impl Plain for coray::lcts::CornerInfo {}
 unsafe impl Plain for coray::lcts::hlcts::HlctsEntry {}
-unsafe impl Plain for u8 {}
-unsafe impl Plain for f32 {}
 unsafe impl Plain for coray::Aabb {}
 unsafe impl Plain for coray::bvh::BvhNode {}
 unsafe impl Plain for coray::bvh::BvhStackItem {}
-unsafe impl Plain for coray::arena::BvhArenaHeader {}
-unsafe impl Plain for coray::arena::ProjArenaHeader {}
+unsafe impl Plain for coray::bvh::layout::BvhArenaHeader {}
+unsafe impl Plain for coray::proj::layout::ProjArenaHeader {}
 unsafe impl Plain for coray::proj::Rect {}
 
 const _: () = {
+    use coray::kd::*;
     assert!(size_of::<KdNode>() == 8 && align_of::<KdNode>() <= ARENA_ALIGN);
     assert!(size_of::<KdLeaf>() == 8);
     assert!(size_of::<KdRopes>() == 48);
     assert!(size_of::<KdEvent>() == 8);
-    assert!(size_of::<KdArenaHeader>() == 100 && align_of::<KdArenaHeader>() == 4);
-    assert!(size_of::<Sphere>() == 16 && align_of::<Sphere>() == 4);
-    assert!(size_of::<Cone>() == 32 && align_of::<Cone>() == 4);
+    assert!(size_of::<KdStackItem>() == 20 && align_of::<KdStackItem>() == 4);
+    assert!(size_of::<layout::KdArenaHeader>() == 108);
+    assert!(size_of::<coray::Sphere>() == 16 && align_of::<coray::Sphere>() == 4);
+    assert!(size_of::<coray::Cone>() == 32 && align_of::<coray::Cone>() == 4);
     assert!(size_of::<coray::lcts::HistoryRecord>() == 8);
     assert!(
         size_of::<coray::lcts::CornerInfo>() == 40 && align_of::<coray::lcts::CornerInfo>() == 4
@@ -52,12 +70,51 @@ const _: () = {
     assert!(size_of::<coray::Aabb>() == 24 && align_of::<coray::Aabb>() == 4);
     assert!(size_of::<coray::bvh::BvhNode>() == 32 && align_of::<coray::bvh::BvhNode>() == 4);
     assert!(size_of::<coray::bvh::BvhStackItem>() == 8);
-    assert!(size_of::<coray::arena::BvhArenaHeader>() == 108);
-    assert!(size_of::<coray::arena::ProjArenaHeader>() == 120);
+    assert!(size_of::<coray::bvh::layout::BvhArenaHeader>() == 124);
+    assert!(size_of::<coray::proj::layout::ProjArenaHeader>() == 128);
     assert!(size_of::<coray::proj::Rect>() == 20 && align_of::<coray::proj::Rect>() == 4);
 };
 
-/// Checks an arena pointer: not null, aligned to [`ARENA_ALIGN`].
+/// The byte ranges one call reads and writes: a written range may overlap
+/// no other range of the call (reads may share memory with each other).
+pub(crate) struct Regions {
+    list: [(usize, usize, bool); 16],
+    n: usize,
+}
+
+impl Regions {
+    pub(crate) fn new() -> Regions {
+        Regions {
+            list: [(0, 0, false); 16],
+            n: 0,
+        }
+    }
+
+    /// Adds `bytes` at `p` (nothing for an empty range).
+    pub(crate) fn add<T>(&mut self, p: *const T, bytes: usize, written: bool) -> &mut Regions {
+        if bytes > 0 && self.n < self.list.len() {
+            self.list[self.n] = (p as usize, bytes, written);
+            self.n += 1;
+        }
+        self
+    }
+
+    /// `InvalidParameter` when a written range overlaps another.
+    pub(crate) fn check(&self) -> Result<(), CorayStatus> {
+        let r = &self.list[..self.n];
+        for (i, a) in r.iter().enumerate() {
+            for b in &r[i + 1..] {
+                let overlap = a.0 < b.0.saturating_add(b.1) && b.0 < a.0.saturating_add(a.1);
+                if overlap && (a.2 || b.2) {
+                    return Err(CorayStatus::InvalidParameter);
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Checks an arena, scratch or stack pointer: not null, 16-byte aligned.
 pub(crate) fn check_arena(p: *const u8) -> Result<(), CorayStatus> {
     if p.is_null() {
         return Err(CorayStatus::NullPointer);
@@ -74,7 +131,7 @@ pub(crate) fn check_arena(p: *const u8) -> Result<(), CorayStatus> {
 /// `base` passed [`check_arena`] and is valid for writes of
 /// `offset + count * size_of::<T>()` bytes for `'a`, with no other reference
 /// to that range alive; `offset` is a multiple of [`ARENA_ALIGN`].
-pub(crate) unsafe fn slice_mut<'a, T: Plain>(
+pub(crate) unsafe fn arena_mut<'a, T: Plain>(
     base: *mut u8,
     offset: usize,
     count: usize,
@@ -90,26 +147,32 @@ pub(crate) unsafe fn slice_mut<'a, T: Plain>(
 /// A shared view of `count` `T`s at `base + offset`.
 ///
 /// # Safety
-/// As [`slice_mut`], for reads, with nobody writing the range during `'a`.
-pub(crate) unsafe fn slice_ref<'a, T: Plain>(
+/// As [`arena_mut`], for reads, with nobody writing the range during `'a`.
+pub(crate) unsafe fn arena_ref<'a, T: Plain>(
     base: *const u8,
     offset: usize,
     count: usize,
 ) -> &'a [T] {
     debug_assert!(offset.is_multiple_of(ARENA_ALIGN));
-    // SAFETY: as in slice_mut; shared access only.
+    // SAFETY: as in arena_mut; shared access only.
     unsafe { core::slice::from_raw_parts(base.add(offset).cast::<T>(), count) }
 }
 
-/// A caller's input array of `count` elements, or the status for a NULL,
-/// misaligned or impossibly long one. NULL is fine when `count` is 0.
+/// Zeroes `bytes` bytes at `base`: a build leaves no byte of the caller's
+/// in the part of the arena its layout covers.
 ///
 /// # Safety
-/// When `count > 0`, `p` points to `count` readable elements that stay
-/// unchanged during `'a`.
-pub(crate) unsafe fn input<'a, T>(p: *const T, count: usize) -> Result<&'a [T], CorayStatus> {
+/// `base` is valid for writes of `bytes` bytes, lent exclusively.
+pub(crate) unsafe fn zero(base: *mut u8, bytes: usize) {
+    // SAFETY: the caller's contract above.
+    unsafe { core::ptr::write_bytes(base, 0, bytes) }
+}
+
+/// Checks an array of `count` `T`s at `p`: not null unless empty, aligned,
+/// at most `isize::MAX` bytes; returns its byte length.
+pub(crate) fn check_array<T>(p: *const T, count: usize) -> Result<usize, CorayStatus> {
     if count == 0 {
-        return Ok(&[]);
+        return Ok(0);
     }
     if p.is_null() {
         return Err(CorayStatus::NullPointer);
@@ -117,11 +180,22 @@ pub(crate) unsafe fn input<'a, T>(p: *const T, count: usize) -> Result<&'a [T], 
     if !(p as usize).is_multiple_of(align_of::<T>()) {
         return Err(CorayStatus::Misaligned);
     }
-    if count
-        .checked_mul(size_of::<T>())
-        .is_none_or(|b| b > isize::MAX as usize)
-    {
-        return Err(CorayStatus::TooManyPrimitives);
+    match count.checked_mul(size_of::<T>()) {
+        Some(b) if b <= isize::MAX as usize => Ok(b),
+        _ => Err(CorayStatus::InvalidParameter),
+    }
+}
+
+/// A caller's input array of `count` elements (NULL is fine when `count`
+/// is 0).
+///
+/// # Safety
+/// When `count > 0`, `p` points to `count` readable elements that stay
+/// unchanged during `'a`.
+pub(crate) unsafe fn input<'a, T>(p: *const T, count: usize) -> Result<&'a [T], CorayStatus> {
+    check_array(p, count)?;
+    if count == 0 {
+        return Ok(&[]);
     }
     // SAFETY: non-null, aligned, size within isize::MAX (checked above);
     // readable and unchanged for 'a by the caller's contract.
@@ -134,61 +208,221 @@ pub(crate) unsafe fn input<'a, T>(p: *const T, count: usize) -> Result<&'a [T], 
 /// When `count > 0`, `p` points to `count` writable elements that nothing
 /// else touches during `'a`.
 pub(crate) unsafe fn output<'a, T>(p: *mut T, count: usize) -> Result<&'a mut [T], CorayStatus> {
+    check_array(p, count)?;
     if count == 0 {
         return Ok(&mut []);
-    }
-    if p.is_null() {
-        return Err(CorayStatus::NullPointer);
-    }
-    if !(p as usize).is_multiple_of(align_of::<T>()) {
-        return Err(CorayStatus::Misaligned);
-    }
-    if count
-        .checked_mul(size_of::<T>())
-        .is_none_or(|b| b > isize::MAX as usize)
-    {
-        return Err(CorayStatus::InvalidParameter);
     }
     // SAFETY: non-null, aligned, size within isize::MAX (checked above);
     // exclusive for 'a by the caller's contract.
     Ok(unsafe { core::slice::from_raw_parts_mut(p, count) })
 }
 
-/// Reads one caller struct by reference.
+/// Reads a versioned input struct: at least its 1.0 size, fields past the
+/// caller's `struct_size` (a struct from an older header) read as zero,
+/// bytes past ours (a newer header) must be zero.
 ///
 /// # Safety
-/// `p` is NULL or points to a readable, aligned `T`.
-pub(crate) unsafe fn input_ref<'a, T>(p: *const T) -> Result<&'a T, CorayStatus> {
+/// `p` is NULL or points to a readable struct of `struct_size` bytes.
+pub(crate) unsafe fn read<T: Versioned>(p: *const T) -> Result<T, CorayStatus> {
     if p.is_null() {
         return Err(CorayStatus::NullPointer);
     }
     if !(p as usize).is_multiple_of(align_of::<T>()) {
         return Err(CorayStatus::Misaligned);
     }
-    // SAFETY: non-null and aligned (checked); readable by the contract.
-    Ok(unsafe { &*p })
+    // SAFETY: non-null, aligned; every struct's first field is its size_t
+    // struct_size, readable by the contract.
+    let declared = unsafe { p.cast::<usize>().read() };
+    if declared < T::SIZE_1_0 || declared > isize::MAX as usize {
+        return Err(CorayStatus::InvalidParameter);
+    }
+    let ours = size_of::<T>();
+    let bytes = p.cast::<u8>();
+    if declared > ours {
+        // SAFETY: the caller's struct has `declared` readable bytes.
+        let tail = unsafe { core::slice::from_raw_parts(bytes.add(ours), declared - ours) };
+        if tail.iter().any(|&b| b != 0) {
+            return Err(CorayStatus::InvalidParameter);
+        }
+    }
+    let mut v = T::default();
+    // SAFETY: copies min(declared, ours) readable bytes into a T; every
+    // bit pattern is a valid T (`Versioned`), the rest stays zero/default.
+    unsafe {
+        core::ptr::copy_nonoverlapping(bytes, (&mut v as *mut T).cast::<u8>(), declared.min(ours))
+    };
+    Ok(v)
 }
 
-/// The core's view of a caller scene.
+/// A checked place for one output struct, written only once the call
+/// succeeds (or never, when the caller passed NULL and may).
+pub(crate) struct Out<T> {
+    p: *mut T,
+    bytes: usize,
+}
+
+impl<T: Versioned> Out<T> {
+    /// Checks `p` (NULL gives `NullPointer` unless `optional`): aligned,
+    /// `struct_size` at least the 1.0 size; notes its bytes in `regions`.
+    ///
+    /// # Safety
+    /// `p` is NULL or points to a writable struct of `struct_size` bytes.
+    pub(crate) unsafe fn new(
+        p: *mut T,
+        optional: bool,
+        regions: &mut Regions,
+    ) -> Result<Out<T>, CorayStatus> {
+        if p.is_null() {
+            return if optional {
+                Ok(Out { p, bytes: 0 })
+            } else {
+                Err(CorayStatus::NullPointer)
+            };
+        }
+        if !(p as usize).is_multiple_of(align_of::<T>()) {
+            return Err(CorayStatus::Misaligned);
+        }
+        // SAFETY: non-null, aligned, starts with a readable size_t.
+        let declared = unsafe { p.cast::<usize>().read() };
+        if declared < T::SIZE_1_0 || declared > isize::MAX as usize {
+            return Err(CorayStatus::InvalidParameter);
+        }
+        let bytes = declared.min(size_of::<T>());
+        regions.add(p, bytes, true);
+        Ok(Out { p, bytes })
+    }
+
+    /// Writes `v` (the caller's `struct_size` bytes of it; `struct_size`
+    /// itself is left as the caller set it).
+    pub(crate) fn write(self, v: T) {
+        if self.p.is_null() {
+            return;
+        }
+        let src = (&v as *const T).cast::<u8>();
+        let w = core::mem::size_of::<usize>();
+        // SAFETY: `p` was checked writable for `bytes` >= SIZE_1_0 > w
+        // bytes by `new`, disjoint from every other buffer of the call
+        // (`Regions`); `v` is a T of at least `bytes` bytes.
+        unsafe {
+            core::ptr::copy_nonoverlapping(src.add(w), self.p.cast::<u8>().add(w), self.bytes - w)
+        };
+    }
+}
+
+/// A checked place for one plain output value (a `size_t`, a `uint8_t`).
+pub(crate) struct OutValue<T> {
+    p: *mut T,
+}
+
+impl<T: Copy> OutValue<T> {
+    /// Checks `p`: NULL is fine when `optional` (nothing is written then).
+    pub(crate) fn new(
+        p: *mut T,
+        optional: bool,
+        regions: &mut Regions,
+    ) -> Result<OutValue<T>, CorayStatus> {
+        if p.is_null() {
+            return if optional {
+                Ok(OutValue { p })
+            } else {
+                Err(CorayStatus::NullPointer)
+            };
+        }
+        check_array(p, 1)?;
+        regions.add(p, size_of::<T>(), true);
+        Ok(OutValue { p })
+    }
+
+    /// Writes `v`.
+    pub(crate) fn write(self, v: T) {
+        if !self.p.is_null() {
+            // SAFETY: checked non-null and aligned by `new`, writable by
+            // the caller's contract, disjoint from the call's other buffers.
+            unsafe { self.p.write(v) }
+        }
+    }
+}
+
+/// The core's view of a caller scene, with its arrays noted in `regions`.
 ///
 /// # Safety
 /// `s` is NULL or points to a `CorayScene` whose arrays hold the counts it
 /// gives and stay unchanged during `'a`.
-pub(crate) unsafe fn scene<'a>(s: *const CorayScene) -> Result<Scene<'a>, CorayStatus> {
+pub(crate) unsafe fn scene<'a>(
+    s: *const crate::CorayScene,
+    regions: &mut Regions,
+) -> Result<coray::Scene<'a>, CorayStatus> {
     // SAFETY: forwarded contract.
-    let s = unsafe { input_ref(s)? };
-    if s.struct_size != size_of::<CorayScene>() {
-        return Err(CorayStatus::InvalidParameter);
-    }
-    // SAFETY (four calls): each array pointer and its element count come from
-    // the caller's scene, which promises them readable; [f32; 3], [u32; 3],
-    // Sphere and Cone are repr(C) runs of 4-byte fields, the C layout.
-    unsafe {
-        Ok(Scene {
+    let s = unsafe { read(s)? };
+    // SAFETY (four calls): each array pointer and its element count come
+    // from the caller's scene, which promises them readable; [f32; 3],
+    // [u32; 3], Sphere and Cone are repr(C) runs of 4-byte fields, the C
+    // layout.
+    let scene = unsafe {
+        coray::Scene {
             vertices: input(s.vertices.cast::<[f32; 3]>(), s.vertex_count)?,
             triangles: input(s.indices.cast::<[u32; 3]>(), s.triangle_count)?,
-            spheres: input(s.spheres.cast::<Sphere>(), s.sphere_count)?,
-            cones: input(s.cones.cast::<Cone>(), s.cone_count)?,
-        })
+            spheres: input(s.spheres.cast::<coray::Sphere>(), s.sphere_count)?,
+            cones: input(s.cones.cast::<coray::Cone>(), s.cone_count)?,
+        }
+    };
+    regions
+        .add(scene.vertices.as_ptr(), size_of_val(scene.vertices), false)
+        .add(
+            scene.triangles.as_ptr(),
+            size_of_val(scene.triangles),
+            false,
+        )
+        .add(scene.spheres.as_ptr(), size_of_val(scene.spheres), false)
+        .add(scene.cones.as_ptr(), size_of_val(scene.cones), false);
+    Ok(scene)
+}
+
+/// A caller's traversal stack of `bytes` bytes as `need` entries of `T`
+/// (none needed, as for a call with no rays: any pointer, even NULL).
+///
+/// # Safety
+/// `p` is NULL or valid for writes of `bytes` bytes, lent exclusively.
+pub(crate) unsafe fn stack<'a, T: Plain>(
+    p: *mut core::ffi::c_void,
+    bytes: usize,
+    need: usize,
+    regions: &mut Regions,
+) -> Result<&'a mut [T], CorayStatus> {
+    if need == 0 {
+        return Ok(&mut []);
+    }
+    let base = p.cast::<u8>();
+    check_arena(base)?;
+    let need_bytes = need
+        .checked_mul(size_of::<T>())
+        .ok_or(CorayStatus::ArenaTooSmall)?;
+    if bytes < need_bytes {
+        return Err(CorayStatus::ArenaTooSmall);
+    }
+    regions.add(base, need_bytes, true);
+    // SAFETY: aligned (checked), `need_bytes <= bytes` writable bytes lent
+    // exclusively by the caller.
+    Ok(unsafe { arena_mut(base, 0, need) })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn written_regions_may_not_overlap() {
+        let buf = [0u8; 64];
+        let p = buf.as_ptr();
+        let mut r = Regions::new();
+        r.add(p, 16, false).add(p.wrapping_add(8), 16, false);
+        assert!(r.check().is_ok(), "reads may share memory");
+        r.add(p.wrapping_add(20), 4, true);
+        assert!(r.check().is_err());
+        let mut r = Regions::new();
+        r.add(p, 16, true).add(p.wrapping_add(16), 16, true);
+        assert!(r.check().is_ok(), "touching is not overlapping");
+        r.add(p, 0, true);
+        assert!(r.check().is_ok(), "an empty range overlaps nothing");
     }
 }

@@ -1,16 +1,148 @@
-//! `coray_kdtree_*`: requirements, build, info, validate, intersect, occluded.
+//! `coray_kdtree_*`: SAH kd-trees. Parameters, requirements, build, open,
+//! info, validate, intersect, occluded. (Image casting and patch
+//! visibility over a kd-tree are in `cast.rs`.)
 
-use crate::carve::{self, check_arena, slice_mut, slice_ref};
-use crate::types::*;
-use crate::{guard, CorayStatus};
-use coray::arena::{KdArenaHeader, KdArenaLayout, KdScratchLayout, KD_HEADER_BYTES};
-use coray::kd::{self, KdScratch, KdStorage, KdTree, Traversal};
-use coray::{Scene, TraceStats};
+use crate::abi::*;
+use crate::carve::{self, check_arena, Out, OutValue, Regions, Versioned};
+use crate::handle::{self, Handle, KIND_KD};
+use crate::{guard, CorayKdTree, CorayStatus};
+use coray::kd::layout::{KdArenaHeader, KdArenaLayout, KdScratchLayout, KD_HEADER_BYTES};
+use coray::kd::{self, KdStackItem, KdTree, Traversal, KD_STACK_LEN};
+use coray::limits::MAX_PRIMS;
+use coray::{Accel, TraceStats};
 use core::ffi::c_void;
+use core::mem::size_of;
 
-const MAX_PRIMS: usize = 1 << 30;
+/// A kd-tree build preset: `CORAY_KD_PRESET_AUTO` or `CORAY_KD_PRESET_PAPER`.
+pub type CorayKdPreset = u32;
+/// SAH-driven termination, depth bound from N. The default.
+pub const CORAY_KD_PRESET_AUTO: CorayKdPreset = 0;
+/// The LCTS paper's settings: depth 16, leaves of at most 2 objects.
+pub const CORAY_KD_PRESET_PAPER: CorayKdPreset = 1;
 
-fn traversal(t: u32) -> Result<Traversal, CorayStatus> {
+/// How a ray walks a kd-tree: `CORAY_TRAVERSAL_HIERARCHICAL` or
+/// `CORAY_TRAVERSAL_ROPES` (the same hits).
+pub type CorayTraversal = u32;
+/// Stack traversal (Havran's TA_B^rec).
+pub const CORAY_TRAVERSAL_HIERARCHICAL: CorayTraversal = 0;
+/// Leaf to leaf by ropes.
+pub const CORAY_TRAVERSAL_ROPES: CorayTraversal = 1;
+
+/// Bytes of the traversal stack every kd-tree trace and cast takes.
+pub const CORAY_KDTREE_STACK_BYTES: usize = 2480;
+const _: () = assert!(CORAY_KDTREE_STACK_BYTES == KD_STACK_LEN * size_of::<KdStackItem>());
+
+/// Parameters of a kd-tree build. Get them from `coray_kdtree_params_default`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CorayKdParams {
+    /// `sizeof(CorayKdParams)`.
+    pub struct_size: usize,
+    /// Deepest leaf; 0 derives it from N as round(8 + 1.3 log2 N). At most 60.
+    pub max_depth: u32,
+    /// A node with at most this many primitives becomes a leaf.
+    pub leaf_size: u32,
+    /// 1: stop where no split beats the leaf by the SAH; 0: split down to
+    /// `leaf_size` or `max_depth`.
+    pub sah_termination: u32,
+    /// Ideal references per primitive (1 to 64): sets the ideal arena size.
+    pub refs_per_prim: u32,
+    /// SAH cost of a traversal step (> 0; Wald and Havran: 15).
+    pub cost_traversal: f32,
+    /// SAH cost of a ray-primitive test (> 0; Wald and Havran: 20).
+    pub cost_intersection: f32,
+    /// Cost factor of a split with an empty side, in (0, 1] (0.8).
+    pub empty_bonus: f32,
+}
+
+/// What a built kd-tree holds, from `coray_kdtree_info` (O(1)).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CorayKdTreeInfo {
+    /// `sizeof(CorayKdTreeInfo)`.
+    pub struct_size: usize,
+    /// Nodes, interior and leaf.
+    pub node_count: u32,
+    /// Leaves.
+    pub leaf_count: u32,
+    /// Primitive references in leaves.
+    pub ref_count: u32,
+    /// Depth of the deepest leaf.
+    pub depth: u32,
+    /// Primitives in the tree (the scene's, less the degenerate ones).
+    pub valid_prim_count: u32,
+    /// 1 when room ran out and the build stopped splitting early.
+    pub truncated: u32,
+    /// Bytes of the arena the tree's layout covers (its capacities): what
+    /// a copy of the arena must hold. The build wrote all of them.
+    pub arena_bytes_used: usize,
+    /// Bytes of traversal stack every trace takes (`CORAY_KDTREE_STACK_BYTES`).
+    pub stack_bytes: usize,
+    /// Lower corner of the scene box.
+    pub bounds_min: [f32; 3],
+    /// Upper corner of the scene box.
+    pub bounds_max: [f32; 3],
+}
+
+// SAFETY (both): repr(C), size_t struct_size first, integer and float
+// fields only; as first published.
+unsafe impl Versioned for CorayKdParams {
+    const SIZE_1_0: usize = size_of::<Self>();
+}
+unsafe impl Versioned for CorayKdTreeInfo {
+    const SIZE_1_0: usize = size_of::<Self>();
+}
+
+/// The parameters of `preset` with `struct_size` set; an unknown preset
+/// gives `struct_size` 0, which every call refuses.
+#[no_mangle]
+pub extern "C" fn coray_kdtree_params_default(preset: CorayKdPreset) -> CorayKdParams {
+    let (p, size) = match preset {
+        CORAY_KD_PRESET_AUTO => (kd::KdParams::auto(), size_of::<CorayKdParams>()),
+        CORAY_KD_PRESET_PAPER => (kd::KdParams::paper(), size_of::<CorayKdParams>()),
+        _ => (kd::KdParams::auto(), 0),
+    };
+    CorayKdParams {
+        struct_size: size,
+        max_depth: p.max_depth,
+        leaf_size: p.leaf_size,
+        sah_termination: p.sah_termination as u32,
+        refs_per_prim: p.refs_per_prim,
+        cost_traversal: p.cost_traversal,
+        cost_intersection: p.cost_intersection,
+        empty_bonus: p.empty_bonus,
+    }
+}
+
+/// A `CorayKdTreeInfo` to fill, `struct_size` set.
+#[no_mangle]
+pub extern "C" fn coray_kdtree_info_default() -> CorayKdTreeInfo {
+    CorayKdTreeInfo {
+        struct_size: size_of::<CorayKdTreeInfo>(),
+        ..Default::default()
+    }
+}
+
+impl CorayKdParams {
+    fn to_core(self) -> Result<kd::KdParams, CorayStatus> {
+        if self.sah_termination > 1 {
+            return Err(CorayStatus::InvalidParameter);
+        }
+        let p = kd::KdParams {
+            max_depth: self.max_depth,
+            leaf_size: self.leaf_size,
+            sah_termination: self.sah_termination == 1,
+            cost_traversal: self.cost_traversal,
+            cost_intersection: self.cost_intersection,
+            empty_bonus: self.empty_bonus,
+            refs_per_prim: self.refs_per_prim,
+        };
+        p.check()?;
+        Ok(p)
+    }
+}
+
+fn traversal(t: CorayTraversal) -> Result<Traversal, CorayStatus> {
     match t {
         CORAY_TRAVERSAL_HIERARCHICAL => Ok(Traversal::Hierarchical),
         CORAY_TRAVERSAL_ROPES => Ok(Traversal::Ropes),
@@ -18,384 +150,476 @@ fn traversal(t: u32) -> Result<Traversal, CorayStatus> {
     }
 }
 
-/// Minimum and ideal element counts for `n` primitives, or the status when
-/// their arenas could not be addressed with 32-bit offsets.
-fn counts(
-    n: usize,
-    p: &kd::KdParams,
-) -> Result<(kd::KdRequirements, kd::KdRequirements), CorayStatus> {
-    if n >= MAX_PRIMS || KdArenaLayout::of(&kd::min_requirements(n)).total_bytes > u32::MAX as usize
-    {
-        return Err(CorayStatus::TooManyPrimitives);
-    }
-    Ok((kd::min_requirements(n), kd::requirements(n, p)))
+/// Minimum and ideal layouts for `n` primitives: tree arena and scratch.
+struct Sizes {
+    min: KdArenaLayout,
+    ideal_bytes: usize,
+    scratch_min: KdScratchLayout,
+    scratch_ideal: KdScratchLayout,
+    ideal: kd::KdRequirements,
 }
 
-/// Arena sizes for a tree over `prim_count` primitives with `params`.
+fn sizes(n: usize, p: &kd::KdParams) -> Result<Sizes, CorayStatus> {
+    let too_many = CorayStatus::TooManyPrimitives;
+    if n >= MAX_PRIMS {
+        return Err(too_many);
+    }
+    let (min, ideal) = (kd::min_requirements(n), kd::requirements(n, p));
+    let min_layout = KdArenaLayout::of(&min).ok_or(too_many)?;
+    // The ideal may pass 4 GiB: a build then takes what an arena holds.
+    let ideal_bytes =
+        KdArenaLayout::of(&ideal).map_or(coray::limits::MAX_ARENA_BYTES, |l| l.total_bytes);
+    Ok(Sizes {
+        min: min_layout,
+        ideal_bytes,
+        scratch_min: KdScratchLayout::of(&min).ok_or(too_many)?,
+        scratch_ideal: KdScratchLayout::of(&ideal)
+            .or_else(|| KdScratchLayout::of(&min))
+            .ok_or(too_many)?,
+        ideal,
+    })
+}
+
+/// Arena, scratch and stack sizes for a tree over `prim_count` primitives.
 ///
-/// # Safety
-/// `params` and `out` are NULL or valid pointers to their types.
+/// Safety: `params` and `out` are NULL or valid pointers to their types.
 #[no_mangle]
 pub unsafe extern "C" fn coray_kdtree_requirements(
     prim_count: usize,
     params: *const CorayKdParams,
-    out: *mut CorayKdRequirements,
+    out: *mut CorayRequirements,
 ) -> CorayStatus {
     guard(|| {
-        // SAFETY: the caller passes a valid params pointer or NULL.
-        let p = unsafe { carve::input_ref(params)? }.to_core()?;
-        let (min, ideal) = counts(prim_count, &p)?;
-        let r = CorayKdRequirements {
-            tree_min_bytes: KdArenaLayout::of(&min).total_bytes,
-            tree_bytes: KdArenaLayout::of(&ideal).total_bytes.min(u32::MAX as usize),
-            scratch_min_bytes: KdScratchLayout::bytes_for(&min),
-            scratch_bytes: KdScratchLayout::bytes_for(&ideal),
+        let mut regions = Regions::new();
+        // SAFETY: the caller passes valid pointers or NULL.
+        let (p, out) = unsafe {
+            (
+                carve::read(params)?.to_core()?,
+                Out::new(out, false, &mut regions)?,
+            )
         };
-        // SAFETY: the caller passes a valid, writable out pointer or NULL.
-        *unsafe { carve::output(out, 1)? }
-            .first_mut()
-            .ok_or(CorayStatus::NullPointer)? = r;
+        let s = sizes(prim_count, &p)?;
+        out.write(CorayRequirements {
+            struct_size: 0,
+            arena_min_bytes: s.min.total_bytes,
+            arena_bytes: s.ideal_bytes,
+            scratch_min_bytes: s.scratch_min.total_bytes,
+            scratch_bytes: s.scratch_ideal.total_bytes,
+            stack_bytes: CORAY_KDTREE_STACK_BYTES,
+        });
         Ok(())
     })
 }
 
-/// Builds an SAH kd-tree over `scene` into `tree_arena`, using
-/// `scratch_arena` as scratch (free again when this returns).
+/// Builds an SAH kd-tree over `scene` into `arena`, using `scratch` (free
+/// again when this returns).
 ///
-/// Both arenas must be 16-byte aligned and must not overlap. Any tree arena
-/// from `tree_min_bytes` up works: with less than `tree_bytes` the build stops
-/// splitting where room runs out (see `CorayKdTreeInfo.truncated`). On
-/// `CORAY_STATUS_ARENA_TOO_SMALL`, `*needed_bytes` (if not NULL) receives the
-/// minimum size of the arena that was too small. Bytes of either arena past
-/// what its layout uses are never written.
+/// Both are 16-byte aligned and must not overlap each other or the scene.
+/// Any arena from `arena_min_bytes` up works: with less than `arena_bytes`
+/// the build stops splitting where room runs out (`truncated` in the info).
+/// On `CORAY_STATUS_ARENA_TOO_SMALL`, `*needed_bytes` (if not NULL)
+/// receives the minimum size of the arena or scratch that was too small.
+/// The part of the arena the tree's layout covers is written entirely (no
+/// byte of the caller's is left in it: two builds of one scene with one
+/// set of parameters give the same bytes); bytes past it are not touched.
 ///
-/// The tree stores primitive indices: trace it with the same scene, unchanged.
-/// The arena holds no pointer, so it may be copied, saved and loaded to any
-/// 16-byte aligned address and traced there.
+/// The tree stores primitive indices: trace it with the same scene,
+/// unchanged. The arena holds no pointer, so it may be copied, saved and
+/// loaded at any 16-byte aligned address and opened there.
 ///
-/// # Safety
-/// Every pointer is NULL or valid for its documented size; the arenas are
-/// not read or written by anyone else during the call.
+/// Safety: every pointer is NULL or valid for its documented size; the
+/// arenas are not read or written by anyone else during the call.
 #[no_mangle]
 pub unsafe extern "C" fn coray_kdtree_build(
     scene: *const CorayScene,
     params: *const CorayKdParams,
-    tree_arena: *mut c_void,
-    tree_bytes: usize,
-    scratch_arena: *mut c_void,
+    arena: *mut c_void,
+    arena_bytes: usize,
+    scratch: *mut c_void,
     scratch_bytes: usize,
     needed_bytes: *mut usize,
 ) -> CorayStatus {
     guard(|| {
+        let mut regions = Regions::new();
         // SAFETY: the caller passes valid scene and params pointers or NULL.
-        let (scene, p) = unsafe { (carve::scene(scene)?, carve::input_ref(params)?.to_core()?) };
-        let (base, sbase) = (tree_arena.cast::<u8>(), scratch_arena.cast::<u8>());
+        let (scene, p) = unsafe {
+            (
+                carve::scene(scene, &mut regions)?,
+                carve::read(params)?.to_core()?,
+            )
+        };
+        let needed = OutValue::new(needed_bytes, true, &mut regions)?;
+        let (base, sbase) = (arena.cast::<u8>(), scratch.cast::<u8>());
         check_arena(base)?;
         check_arena(sbase)?;
         let n = scene.prim_count();
-        let (min, ideal) = counts(n, &p)?;
-        let too_small = |bytes: usize| {
-            if !needed_bytes.is_null()
-                && (needed_bytes as usize).is_multiple_of(core::mem::align_of::<usize>())
-            {
-                // SAFETY: non-null and aligned; the caller promises it writable.
-                unsafe { *needed_bytes = bytes };
-            }
-            Err(CorayStatus::ArenaTooSmall)
-        };
-        let Some(layout) = KdArenaLayout::fit(tree_bytes.min(u32::MAX as usize), &min, &ideal)
-        else {
-            return too_small(KdArenaLayout::of(&min).total_bytes);
+        let s = sizes(n, &p)?;
+        let min = kd::min_requirements(n);
+        let fit = arena_bytes.min(coray::limits::MAX_ARENA_BYTES);
+        let Some(layout) = KdArenaLayout::fit(fit, &min, &s.ideal) else {
+            needed.write(s.min.total_bytes);
+            return Err(CorayStatus::ArenaTooSmall);
         };
         let Some(sl) = KdScratchLayout::fit(scratch_bytes, n, min.events) else {
-            return too_small(KdScratchLayout::bytes_for(&min));
+            needed.write(s.scratch_min.total_bytes);
+            return Err(CorayStatus::ArenaTooSmall);
         };
-        let scratch_used = sl.events_offset + sl.events * core::mem::size_of::<kd::KdEvent>();
-        let (t0, s0) = (base as usize, sbase as usize);
-        if t0 < s0 + scratch_used && s0 < t0 + layout.total_bytes {
-            return Err(CorayStatus::InvalidParameter);
-        }
+        regions
+            .add(base, layout.total_bytes, true)
+            .add(sbase, sl.total_bytes, true)
+            .check()?;
         scene.check()?;
         let c = &layout.counts;
-        // SAFETY: both arenas passed check_arena; the layout and scratch
-        // layout lie within tree_bytes and scratch_bytes (fit() checked) and
-        // their parts do not overlap each other (layout formulas) nor across
-        // arenas (checked above); the caller gives us the arenas exclusively.
+        // SAFETY: both arenas passed check_arena; the layouts lie within
+        // arena_bytes and scratch_bytes (fit() checked) and their parts do
+        // not overlap each other (layout formulas) nor across arenas or
+        // with the scene (Regions); the caller lends the arenas exclusively.
         let (header, storage, scratch) = unsafe {
+            carve::zero(base, layout.total_bytes);
             (
-                slice_mut::<KdArenaHeader>(base, 0, 1),
-                KdStorage {
-                    nodes: slice_mut(base, layout.nodes_offset, c.nodes),
-                    leaves: slice_mut(base, layout.leaves_offset, c.leaves),
-                    ropes: slice_mut(base, layout.ropes_offset, c.ropes),
-                    refs: slice_mut(base, layout.refs_offset, c.refs),
+                carve::arena_mut::<KdArenaHeader>(base, 0, 1),
+                kd::KdStorage {
+                    nodes: carve::arena_mut(base, layout.nodes_offset, c.nodes),
+                    leaves: carve::arena_mut(base, layout.leaves_offset, c.leaves),
+                    ropes: carve::arena_mut(base, layout.ropes_offset, c.ropes),
+                    refs: carve::arena_mut(base, layout.refs_offset, c.refs),
                 },
-                KdScratch {
-                    prim_flags: slice_mut(sbase, 0, sl.prim_flags),
-                    events: slice_mut(sbase, sl.events_offset, sl.events),
+                kd::KdScratch {
+                    prim_flags: carve::arena_mut(sbase, 0, sl.prim_flags),
+                    events: carve::arena_mut(sbase, sl.events_offset, sl.events),
                 },
             )
         };
-        let tree = kd::build_sah(&scene, &p, storage, scratch)?;
-        header[0] = KdArenaHeader::new(tree.info, &layout);
+        let tree = kd::build(&scene, &p, storage, scratch)?;
+        header[0] = KdArenaHeader::new(*tree.info(), &layout);
         Ok(())
     })
 }
 
-/// The tree in an arena, checked in O(1) (header, layout, scene counts).
+/// Opens the kd-tree in `arena` (as `coray_kdtree_build` wrote it, or a
+/// copy of it) with the scene it was built on: O(1) checks of the header,
+/// the layout and the scene's counts, then `*out` is the handle every other
+/// call takes. The arena and the scene's arrays must stay in place and
+/// unchanged while the handle is used. Run `coray_kdtree_validate` once on
+/// an arena from untrusted storage: until it accepts it, calls on the
+/// handle never crash or hang, but may fail with
+/// `CORAY_STATUS_CORRUPT_ARENA` and leave outputs partly written.
 ///
-/// # Safety
-/// `arena` is NULL or valid for reads of `bytes` bytes that nobody writes
-/// during `'a`; `scene`'s arrays likewise.
-pub(crate) unsafe fn tree<'a>(
+/// Safety: `arena` is NULL or readable for `arena_bytes`; `scene` and `out`
+/// NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn coray_kdtree_open(
     arena: *const c_void,
-    bytes: usize,
-    scene: Scene<'a>,
-) -> Result<KdTree<'a>, CorayStatus> {
-    let base = arena.cast::<u8>();
-    check_arena(base)?;
-    if bytes < KD_HEADER_BYTES {
-        return Err(CorayStatus::CorruptArena);
-    }
-    // SAFETY: aligned, readable for bytes >= KD_HEADER_BYTES >= one header.
-    let header = unsafe { slice_ref::<KdArenaHeader>(base, 0, 1)[0] };
-    let l = header.layout(bytes)?;
-    let c = &l.counts;
-    // SAFETY: the layout lies within `bytes` (checked by layout()), its
-    // offsets are multiples of 16, and the arena is only read.
-    let (nodes, leaves, ropes, refs) = unsafe {
-        (
-            slice_ref(base, l.nodes_offset, c.nodes),
-            slice_ref(base, l.leaves_offset, c.leaves),
-            slice_ref(base, l.ropes_offset, c.ropes),
-            slice_ref(base, l.refs_offset, c.refs),
-        )
-    };
-    Ok(KdTree::from_parts(
-        scene,
-        header.info,
-        nodes,
-        leaves,
-        ropes,
-        refs,
-    )?)
+    arena_bytes: usize,
+    scene: *const CorayScene,
+    out: *mut CorayKdTree,
+) -> CorayStatus {
+    guard(|| {
+        let mut regions = Regions::new();
+        // SAFETY: forwarded caller contract.
+        let scene = unsafe { carve::scene(scene, &mut regions)? };
+        carve::check_array(out, 1)?;
+        regions.add(out, size_of::<CorayKdTree>(), true);
+        let base = arena.cast::<u8>();
+        check_arena(base)?;
+        if arena_bytes < KD_HEADER_BYTES {
+            return Err(CorayStatus::CorruptArena);
+        }
+        regions.add(base, arena_bytes, false).check()?;
+        // SAFETY: aligned, readable for at least one header.
+        let h = unsafe { carve::arena_ref::<KdArenaHeader>(base, 0, 1)[0] };
+        let l = h.layout(arena_bytes)?;
+        let c = &l.counts;
+        let mut hd = Handle {
+            kind: KIND_KD,
+            arena: base as usize,
+            arena_bytes: l.total_bytes,
+            ..Handle::default()
+        };
+        hd.set_scene(&scene);
+        hd.parts[0] = (0, 1);
+        hd.parts[1] = (l.nodes_offset, c.nodes);
+        hd.parts[2] = (l.leaves_offset, c.leaves);
+        hd.parts[3] = (l.ropes_offset, c.ropes);
+        hd.parts[4] = (l.refs_offset, c.refs);
+        // The tree must assemble: counts, magic, version, scene.
+        // SAFETY: the handle describes the arena just checked, readable.
+        unsafe { tree_of(&hd, scene)? };
+        // SAFETY: out checked non-null, aligned, disjoint from the arena.
+        unsafe { out.write(CorayKdTree { opaque: hd.words() }) };
+        Ok(())
+    })
 }
 
-/// What the tree in `tree_arena` holds, from its header (O(1)).
+/// The tree a handle describes, over `scene`.
 ///
-/// # Safety
-/// `tree_arena` is valid for reads of `tree_bytes`; `out` is NULL or writable.
+/// Safety: the handle's arena is readable and unchanged during `'a`.
+unsafe fn tree_of<'a>(h: &Handle, scene: coray::Scene<'a>) -> Result<KdTree<'a>, CorayStatus> {
+    // SAFETY: the handle's parts lie within its arena (Handle::part checks),
+    // readable by the caller's contract.
+    unsafe {
+        let header = h.part::<KdArenaHeader>(0)?[0];
+        Ok(KdTree::from_parts(
+            scene,
+            header.info,
+            h.part(1)?,
+            h.part(2)?,
+            h.part(3)?,
+            h.part(4)?,
+        )?)
+    }
+}
+
+/// The tree behind a caller's handle, its buffers noted in `regions`.
+///
+/// Safety: `t` is NULL or a handle `coray_kdtree_open` filled, whose arena
+/// and scene are still in place and unchanged during `'a`.
+pub(crate) unsafe fn open<'a>(
+    t: *const CorayKdTree,
+    regions: &mut Regions,
+) -> Result<KdTree<'a>, CorayStatus> {
+    // SAFETY: forwarded contract.
+    unsafe { open_handle(t, regions).map(|(_, t)| t) }
+}
+
+/// [`open`], with the handle (whose `arena_bytes` is the layout's size).
+///
+/// Safety: as [`open`].
+unsafe fn open_handle<'a>(
+    t: *const CorayKdTree,
+    regions: &mut Regions,
+) -> Result<(Handle, KdTree<'a>), CorayStatus> {
+    // SAFETY: forwarded contract.
+    unsafe {
+        let h = handle::read(t.cast(), KIND_KD, regions)?;
+        regions.add(h.arena as *const u8, h.arena_bytes, false);
+        let scene = h.scene(regions);
+        Ok((h, tree_of(&h, scene)?))
+    }
+}
+
+/// What the tree holds, from its header (O(1)).
+///
+/// Safety: `tree` is a handle `coray_kdtree_open` filled (see there); `out`
+/// NULL or writable.
 #[no_mangle]
 pub unsafe extern "C" fn coray_kdtree_info(
-    tree_arena: *const c_void,
-    tree_bytes: usize,
+    tree: *const CorayKdTree,
     out: *mut CorayKdTreeInfo,
 ) -> CorayStatus {
     guard(|| {
-        let base = tree_arena.cast::<u8>();
-        check_arena(base)?;
-        if tree_bytes < KD_HEADER_BYTES {
-            return Err(CorayStatus::CorruptArena);
-        }
-        // SAFETY: aligned, readable for at least one header.
-        let h = unsafe { slice_ref::<KdArenaHeader>(base, 0, 1)[0] };
-        h.layout(tree_bytes)?;
-        let i = &h.info;
-        let info = CorayKdTreeInfo {
+        let mut regions = Regions::new();
+        // SAFETY: forwarded caller contract.
+        let ((h, t), out) = unsafe {
+            (
+                open_handle(tree, &mut regions)?,
+                Out::new(out, false, &mut regions)?,
+            )
+        };
+        regions.check()?;
+        let i = t.info();
+        out.write(CorayKdTreeInfo {
+            struct_size: 0,
             node_count: i.node_count,
             leaf_count: i.leaf_count,
             ref_count: i.ref_count,
             depth: i.depth,
             valid_prim_count: i.valid_prim_count,
             truncated: i.truncated() as u32,
-            arena_bytes_used: h.layout_bytes as usize,
+            arena_bytes_used: h.arena_bytes,
+            stack_bytes: CORAY_KDTREE_STACK_BYTES,
             bounds_min: i.bounds_min,
             bounds_max: i.bounds_max,
-        };
-        // SAFETY: out is NULL or writable (caller's contract).
-        *unsafe { carve::output(out, 1)? }
-            .first_mut()
-            .ok_or(CorayStatus::NullPointer)? = info;
+        });
         Ok(())
     })
 }
 
-/// Checks every structural invariant of the tree against `scene` (O(size));
-/// run it on an arena loaded from untrusted storage before tracing.
-/// `CORAY_STATUS_CORRUPT_ARENA` when anything is wrong.
+/// Checks every structural invariant of the tree against its scene, in
+/// time linear in the tree, never crashing on any bytes:
+/// `CORAY_STATUS_CORRUPT_ARENA` when anything is wrong. Once it accepts an
+/// arena, every call on it gives the results of a clean build. `stack` is
+/// unused by kd-trees (it may be NULL); `out` may be NULL.
 ///
-/// # Safety
-/// As [`coray_kdtree_info`]; `scene` is valid.
+/// Safety: as `coray_kdtree_info`.
 #[no_mangle]
 pub unsafe extern "C" fn coray_kdtree_validate(
-    tree_arena: *const c_void,
-    tree_bytes: usize,
-    scene: *const CorayScene,
-    out: *mut CorayKdTreeStats,
+    tree: *const CorayKdTree,
+    stack: *mut c_void,
+    stack_bytes: usize,
+    out: *mut CorayShape,
 ) -> CorayStatus {
+    let _ = (stack, stack_bytes);
     guard(|| {
+        let mut regions = Regions::new();
         // SAFETY: forwarded caller contract.
-        let t = unsafe { tree(tree_arena, tree_bytes, carve::scene(scene)?)? };
-        let s = t.validate()?;
-        if !out.is_null() {
-            // SAFETY: non-null; writable by the caller's contract.
-            *unsafe { carve::output(out, 1)? }
-                .first_mut()
-                .ok_or(CorayStatus::NullPointer)? = CorayKdTreeStats {
-                node_count: s.nodes,
-                leaf_count: s.leaves,
-                empty_leaf_count: s.empty_leaves,
-                ref_count: s.refs,
-                depth: s.depth,
-                sah_cost: s.sah_cost,
-            };
-        }
+        let (t, out) = unsafe {
+            (
+                open(tree, &mut regions)?,
+                Out::new(out, true, &mut regions)?,
+            )
+        };
+        regions.check()?;
+        let s = Accel::validate(&t, &mut [])?;
+        out.write(CorayShape {
+            struct_size: 0,
+            node_count: s.nodes,
+            leaf_count: s.leaves,
+            empty_leaf_count: s.empty_leaves,
+            ref_count: s.refs,
+            depth: s.depth,
+        });
         Ok(())
     })
 }
 
-/// Writes `s` to `stats` unless it is NULL.
-fn put_stats(stats: *mut CorayTraceStats, s: TraceStats) -> Result<(), CorayStatus> {
-    if !stats.is_null() {
-        // SAFETY: non-null; the caller promises a writable CorayTraceStats.
-        if let Some(o) = unsafe { carve::output(stats, 1)? }.first_mut() {
-            *o = s.into();
+/// The body of every trace entry point: checks the handle, the arrays, the
+/// stack and the statistics before anything is traced, then writes
+/// `answer` for each ray.
+///
+/// Safety: as `coray_kdtree_intersect`, with `out` holding `count` `O`s.
+#[allow(clippy::too_many_arguments)]
+unsafe fn batch<O>(
+    tree: *const CorayKdTree,
+    method: CorayTraversal,
+    rays: *const CorayRay,
+    out: *mut O,
+    count: usize,
+    stack: *mut c_void,
+    stack_bytes: usize,
+    stats: *mut CorayTraceStats,
+    answer: impl Fn(&KdTree, &coray::Ray, Traversal, &mut [KdStackItem], &mut TraceStats) -> O,
+) -> CorayStatus {
+    guard(|| {
+        let method = traversal(method)?;
+        let mut regions = Regions::new();
+        // SAFETY: forwarded caller contract for every pointer.
+        let (t, rays, out, stk, stats) = unsafe {
+            let t = open(tree, &mut regions)?;
+            let rays = carve::input(rays, count)?;
+            regions.add(rays.as_ptr(), size_of_val(rays), false);
+            let out = carve::output(out, count)?;
+            regions.add(out.as_ptr(), size_of_val(out), true);
+            let need = if count == 0 { 0 } else { KD_STACK_LEN };
+            let stk = carve::stack::<KdStackItem>(stack, stack_bytes, need, &mut regions)?;
+            (t, rays, out, stk, Out::new(stats, true, &mut regions)?)
+        };
+        regions.check()?;
+        let mut st = TraceStats::default();
+        for (r, o) in rays.iter().zip(out.iter_mut()) {
+            *o = answer(&t, &r.into(), method, stk, &mut st);
         }
-    }
-    Ok(())
+        if st.faults > 0 {
+            return Err(CorayStatus::CorruptArena);
+        }
+        stats.write(CorayTraceStats::of(&st));
+        Ok(())
+    })
 }
 
-/// Closest hits of `count` rays: `hits[i]` for `rays[i]`. `traversal` is
-/// `CORAY_TRAVERSAL_HIERARCHICAL` or `CORAY_TRAVERSAL_ROPES` (same hits).
-/// `stats` may be NULL; otherwise it receives this call's counts.
-/// Thread-safe: many threads may trace one tree at once.
+/// Closest hits of `count` rays: `hits[i]` for `rays[i]`, by `traversal`.
+/// `stack` is `CORAY_KDTREE_STACK_BYTES` of traversal stack (16-byte
+/// aligned; one per thread). `stats` may be NULL. Many threads may trace
+/// one tree at once, each with its own stack.
 ///
-/// # Safety
-/// `rays` and `hits` hold `count` elements (may be NULL when `count` is 0);
-/// the arena and scene as in [`coray_kdtree_validate`].
+/// Safety: `tree` as in `coray_kdtree_info`; `rays` and `hits` hold `count`
+/// elements (may be NULL when `count` is 0); `stack` is writable for
+/// `stack_bytes`; `stats` is NULL or writable.
 #[no_mangle]
 pub unsafe extern "C" fn coray_kdtree_intersect(
-    tree_arena: *const c_void,
-    tree_bytes: usize,
-    scene: *const CorayScene,
-    traversal_method: u32,
+    tree: *const CorayKdTree,
+    traversal: CorayTraversal,
     rays: *const CorayRay,
     hits: *mut CorayHit,
     count: usize,
+    stack: *mut c_void,
+    stack_bytes: usize,
     stats: *mut CorayTraceStats,
 ) -> CorayStatus {
-    guard(|| {
-        let method = traversal(traversal_method)?;
-        // SAFETY: forwarded caller contract for every pointer.
-        let (t, rays, hits) = unsafe {
-            (
-                tree(tree_arena, tree_bytes, carve::scene(scene)?)?,
-                carve::input(rays, count)?,
-                carve::output(hits, count)?,
-            )
-        };
-        let mut st = TraceStats::default();
-        for (r, h) in rays.iter().zip(hits.iter_mut()) {
-            *h = t.intersect(&r.into(), method, &mut st).into();
-        }
-        put_stats(stats, st)
-    })
+    // SAFETY: forwarded caller contract.
+    unsafe {
+        batch(
+            tree,
+            traversal,
+            rays,
+            hits,
+            count,
+            stack,
+            stack_bytes,
+            stats,
+            |t, r, m, s, st| t.intersect(r, m, s, st).into(),
+        )
+    }
 }
 
-/// [`coray_kdtree_intersect`] for one ray.
+/// `coray_kdtree_intersect` for one ray.
 ///
-/// # Safety
-/// As [`coray_kdtree_intersect`] with `count` = 1.
+/// Safety: as `coray_kdtree_intersect` with `count` 1.
 #[no_mangle]
 pub unsafe extern "C" fn coray_kdtree_intersect1(
-    tree_arena: *const c_void,
-    tree_bytes: usize,
-    scene: *const CorayScene,
-    traversal_method: u32,
+    tree: *const CorayKdTree,
+    traversal: CorayTraversal,
     ray: *const CorayRay,
     hit: *mut CorayHit,
+    stack: *mut c_void,
+    stack_bytes: usize,
     stats: *mut CorayTraceStats,
 ) -> CorayStatus {
     if ray.is_null() || hit.is_null() {
         return CorayStatus::NullPointer;
     }
     // SAFETY: forwarded caller contract.
+    unsafe { coray_kdtree_intersect(tree, traversal, ray, hit, 1, stack, stack_bytes, stats) }
+}
+
+/// Any-hit queries (shadow rays) of `count` rays: `occluded[i]` is 1 when
+/// something lies on `rays[i]` within `[tnear, tfar]`, else 0. Otherwise
+/// as `coray_kdtree_intersect`.
+///
+/// Safety: as `coray_kdtree_intersect`, with `occluded` holding `count` bytes.
+#[no_mangle]
+pub unsafe extern "C" fn coray_kdtree_occluded(
+    tree: *const CorayKdTree,
+    traversal: CorayTraversal,
+    rays: *const CorayRay,
+    occluded: *mut u8,
+    count: usize,
+    stack: *mut c_void,
+    stack_bytes: usize,
+    stats: *mut CorayTraceStats,
+) -> CorayStatus {
+    // SAFETY: forwarded caller contract.
     unsafe {
-        coray_kdtree_intersect(
-            tree_arena,
-            tree_bytes,
-            scene,
-            traversal_method,
-            ray,
-            hit,
-            1,
+        batch(
+            tree,
+            traversal,
+            rays,
+            occluded,
+            count,
+            stack,
+            stack_bytes,
             stats,
+            |t, r, m, s, st| t.occluded(r, m, s, st) as u8,
         )
     }
 }
 
-/// Any-hit queries (shadow rays) for `count` rays: `occluded[i]` is 1 when
-/// something lies on `rays[i]` within `[tnear, tfar]`, else 0.
+/// `coray_kdtree_occluded` for one ray.
 ///
-/// # Safety
-/// As [`coray_kdtree_intersect`], with `occluded` holding `count` bytes.
-#[no_mangle]
-pub unsafe extern "C" fn coray_kdtree_occluded(
-    tree_arena: *const c_void,
-    tree_bytes: usize,
-    scene: *const CorayScene,
-    traversal_method: u32,
-    rays: *const CorayRay,
-    occluded: *mut u8,
-    count: usize,
-    stats: *mut CorayTraceStats,
-) -> CorayStatus {
-    guard(|| {
-        let method = traversal(traversal_method)?;
-        // SAFETY: forwarded caller contract for every pointer.
-        let (t, rays, out) = unsafe {
-            (
-                tree(tree_arena, tree_bytes, carve::scene(scene)?)?,
-                carve::input(rays, count)?,
-                carve::output(occluded, count)?,
-            )
-        };
-        let mut st = TraceStats::default();
-        for (r, o) in rays.iter().zip(out.iter_mut()) {
-            *o = t.occluded(&r.into(), method, &mut st) as u8;
-        }
-        put_stats(stats, st)
-    })
-}
-
-/// [`coray_kdtree_occluded`] for one ray.
-///
-/// # Safety
-/// As [`coray_kdtree_occluded`] with `count` = 1.
+/// Safety: as `coray_kdtree_occluded` with `count` 1.
 #[no_mangle]
 pub unsafe extern "C" fn coray_kdtree_occluded1(
-    tree_arena: *const c_void,
-    tree_bytes: usize,
-    scene: *const CorayScene,
-    traversal_method: u32,
+    tree: *const CorayKdTree,
+    traversal: CorayTraversal,
     ray: *const CorayRay,
     occluded: *mut u8,
+    stack: *mut c_void,
+    stack_bytes: usize,
     stats: *mut CorayTraceStats,
 ) -> CorayStatus {
     if ray.is_null() || occluded.is_null() {
         return CorayStatus::NullPointer;
     }
     // SAFETY: forwarded caller contract.
-    unsafe {
-        coray_kdtree_occluded(
-            tree_arena,
-            tree_bytes,
-            scene,
-            traversal_method,
-            ray,
-            occluded,
-            1,
-            stats,
-        )
-    }
+    unsafe { coray_kdtree_occluded(tree, traversal, ray, occluded, 1, stack, stack_bytes, stats) }
 }

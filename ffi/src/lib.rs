@@ -1,39 +1,49 @@
-//! The C ABI of coray. The only crate of the project with `unsafe`: it turns
-//! the caller's pointers and byte arenas into the typed slices the core works
-//! on, checks them first, and states each invariant in a `// SAFETY:` comment.
+//! The C ABI of coray, version 1.0. The only crate of the project with
+//! `unsafe`: it checks the caller's pointers, sizes and handles, turns byte
+//! arenas into the typed slices the core works on, and states each
+//! invariant in a `// SAFETY:` comment. docs/c-api.md states the
+//! conventions every function follows; in short:
 //!
-//! Conventions (every function):
-//! - returns a [`CorayStatus`]; outputs are written only on `CORAY_STATUS_OK`
-//!   (`CORAY_STATUS_ARENA_TOO_SMALL` also writes the bytes needed);
-//! - never unwinds into C: with feature `std` a panic becomes
-//!   `CORAY_STATUS_INTERNAL_ERROR`; the bare build aborts;
-//! - never allocates; the caller owns every byte, before and after the call;
-//! - parameter structs start with `struct_size` (set it to `sizeof`) and have
-//!   a `_default()` function;
-//! - a built tree arena is immutable: any number of threads may trace it at
-//!   once, provided nobody writes to it meanwhile.
+//! - names are `coray_<object>_<verb>`; every function returns a
+//!   `CorayStatus` (but `*_default`, `coray_version`, `coray_status_str`);
+//! - outputs are written only on `CORAY_STATUS_OK` (`*needed_bytes` of a
+//!   build also on `CORAY_STATUS_ARENA_TOO_SMALL`);
+//! - no buffer written by a call may overlap another buffer of that call;
+//! - every struct passed by pointer, but ray and hit arrays, starts with
+//!   `struct_size`;
+//! - enumerations are named `uint32_t` types with `CORAY_*` constants;
+//! - never unwinds into C, never prints, never allocates: the caller owns
+//!   every byte, before and after the call.
 #![no_std]
-#![deny(unsafe_op_in_unsafe_fn)]
-#![warn(missing_docs)]
 #![allow(clippy::missing_safety_doc)] // Each function's doc has a "Safety" paragraph in prose for C readers.
 
 #[cfg(feature = "std")]
 extern crate std;
 
+mod abi;
 mod bvh;
 mod carve;
+mod cast;
+mod handle;
 mod kdtree;
-mod lcts;
 mod proj;
-mod types;
 
+pub use abi::*;
 pub use bvh::*;
+pub use cast::*;
+pub use handle::{CorayBvh, CorayKdTree, CorayProj};
 pub use kdtree::*;
-pub use lcts::*;
 pub use proj::*;
-pub use types::*;
 
-/// Status of every entry point. Numbers are fixed forever.
+/// Major version of the C ABI: changes only with an incompatible change.
+pub const CORAY_VERSION_MAJOR: u32 = 1;
+/// Minor version: new functions or struct fields, compatible.
+pub const CORAY_VERSION_MINOR: u32 = 0;
+/// Patch version: fixes only.
+pub const CORAY_VERSION_PATCH: u32 = 0;
+
+/// Status of every entry point. Numbers are fixed forever; docs/c-api.md
+/// says which situations give which status.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CorayStatus {
@@ -41,19 +51,25 @@ pub enum CorayStatus {
     Ok = 0,
     /// A required pointer was NULL.
     NullPointer = 1,
-    /// An arena (16 bytes) or an input array (its element's alignment) is misaligned.
+    /// An arena or stack (16 bytes), an array or struct (its element's
+    /// alignment) is misaligned.
     Misaligned = 2,
-    /// An arena is smaller than the minimum; the bytes needed are reported.
+    /// An arena, scratch or stack is smaller than needed; a build reports
+    /// the bytes needed.
     ArenaTooSmall = 3,
-    /// A parameter is out of its documented range, or `struct_size` is wrong.
+    /// A parameter is out of its documented range, a `struct_size` is too
+    /// small, buffers overlap, a handle was not filled by its open call,
+    /// or a ray is not one the structure takes.
     InvalidParameter = 4,
     /// A triangle names a vertex that does not exist.
     IndexOutOfRange = 5,
-    /// More primitives than the structure can index (2^30), or an arena over 4 GiB.
+    /// More primitives than a structure can index (2^30), or an arena over
+    /// 4 GiB.
     TooManyPrimitives = 6,
-    /// A tree arena fails its header checks or its validation.
+    /// An arena fails its header checks or its validation, or a trace met
+    /// a broken invariant of an arena that was never validated.
     CorruptArena = 7,
-    /// The scene passed to a trace call is not the one the tree was built on.
+    /// The scene is not the one the arena was built on.
     SceneMismatch = 8,
     /// A bug in coray (a caught panic). Please report it.
     InternalError = 9,
@@ -74,8 +90,9 @@ impl From<coray::Error> for CorayStatus {
     }
 }
 
-/// Runs an entry point's body; with `std`, a panic becomes
-/// [`CorayStatus::InternalError`] instead of unwinding into C.
+/// Runs an entry point's body. With `std`, a panic (a bug: no input can
+/// cause one) becomes `CorayStatus::InternalError` instead of unwinding
+/// into C; the bare build aborts.
 fn guard(f: impl FnOnce() -> Result<(), CorayStatus>) -> CorayStatus {
     #[cfg(feature = "std")]
     let r = std::panic::catch_unwind(core::panic::AssertUnwindSafe(f))
@@ -95,17 +112,25 @@ pub extern "C" fn coray_status_str(status: i32) -> *const core::ffi::c_char {
     let s: &'static core::ffi::CStr = match status {
         0 => c"ok",
         1 => c"null pointer",
-        2 => c"misaligned arena or array",
-        3 => c"arena too small",
+        2 => c"misaligned arena, stack, array or struct",
+        3 => c"arena, scratch or stack too small",
         4 => c"invalid parameter",
         5 => c"vertex index out of range",
         6 => c"too many primitives or arena over 4 GiB",
         7 => c"corrupt arena",
-        8 => c"scene differs from the one the tree was built on",
+        8 => c"scene differs from the one the arena was built on",
         9 => c"internal error (a bug in coray)",
         _ => c"unknown status",
     };
     s.as_ptr()
+}
+
+/// The library's version, `(major << 16) | (minor << 8) | patch`: compare
+/// it with the header's `CORAY_VERSION_*` to catch a header and library
+/// of different versions.
+#[no_mangle]
+pub extern "C" fn coray_version() -> u32 {
+    (CORAY_VERSION_MAJOR << 16) | (CORAY_VERSION_MINOR << 8) | CORAY_VERSION_PATCH
 }
 
 #[cfg(not(feature = "std"))]
@@ -117,4 +142,20 @@ fn panic(_: &core::panic::PanicInfo) -> ! {
     // SAFETY: C's abort() takes no arguments, touches no Rust state and
     // does not return; it is the only way out of a panic without std.
     unsafe { abort() }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn version_constants_are_the_crate_version() {
+        let v = env!("CARGO_PKG_VERSION");
+        let want = std::format!(
+            "{}.{}.{}",
+            super::CORAY_VERSION_MAJOR,
+            super::CORAY_VERSION_MINOR,
+            super::CORAY_VERSION_PATCH
+        );
+        assert_eq!(v, want);
+        assert_eq!(super::coray_version(), 1 << 16);
+    }
 }

@@ -1,54 +1,69 @@
 //! `coray_proj_*`: projection hierarchies (Bezerianos 2001) for a camera or
-//! a light plane: planes, requirements, build, info, validate, intersect,
-//! occluded. One hierarchy per arena; a light cube is six arenas.
+//! a light plane: planes, parameters, requirements, build, open, info,
+//! validate, intersect, occluded. One hierarchy per arena; a light cube is
+//! six arenas.
 
-use crate::bvh::{scene_counts, stack, too_small, CorayBvhParams, CorayBvhStats, Kind, MAX_PRIMS};
-use crate::carve::{self, check_arena, slice_mut, slice_ref};
-use crate::lcts::{camera, CorayCamera};
-use crate::types::{CorayHit, CorayRay, CorayScene};
-use crate::{guard, CorayStatus};
-use coray::arena::{
-    BvhScratchLayout, ProjArenaHeader, ProjArenaLayout, PROJ_HEADER_BYTES, PROJ_MAGIC, PROJ_VERSION,
+use crate::abi::*;
+use crate::bvh::{check_scene, scene_counts, CorayBvhBuilder, CorayBvhParams, Kind};
+use crate::carve::{self, check_arena, Out, OutValue, Regions, Versioned};
+use crate::cast::{camera, CorayCamera};
+use crate::handle::{self, Handle, KIND_PROJ};
+use crate::{guard, CorayProj, CorayStatus};
+use coray::bvh::layout::code;
+use coray::bvh::{Bvh, BvhNode, BvhScratch, BvhStackItem};
+use coray::limits::MAX_PRIMS;
+use coray::proj::layout::{
+    ProjArenaHeader, ProjArenaLayout, ProjScratchLayout, PROJ_HEADER_BYTES, PROJ_MAGIC,
+    PROJ_VERSION,
 };
-use coray::bvh::{self, Bvh, BvhNode, BvhScratch, BvhStackItem};
 use coray::proj::lights::{Light, LightPlanes};
 use coray::proj::{
     build_proj, proj_requirements, Criteria, ProjBuilder, ProjHierarchy, ProjPlane, ProjScheme,
-    ProjScratch, ProjStats, ProjStorage, Rect,
+    ProjScratch, ProjStorage, Rect,
 };
-use coray::{Aabb, Ray, Scene, Vec3};
+use coray::{Aabb, Accel, Ray, Scene, TraceStats, Vec3};
 use core::ffi::c_void;
 use core::mem::size_of;
 
-/// Structure built on the primitives' rectangles on the plane.
-pub const CORAY_PROJ_CRITERIA_2D: u32 = 0;
+/// What a projection hierarchy's structure is built on: `CORAY_PROJ_CRITERIA_*`.
+pub type CorayProjCriteria = u32;
+/// The primitives' rectangles on the plane.
+pub const CORAY_PROJ_CRITERIA_2D: CorayProjCriteria = 0;
 /// "Dummy": a 3D structure whose nodes carry their children's rectangles.
-pub const CORAY_PROJ_CRITERIA_DUMMY: u32 = 1;
+pub const CORAY_PROJ_CRITERIA_DUMMY: CorayProjCriteria = 1;
 
-/// Nodes tested by the ray's point in their rectangle (4 comparisons).
-pub const CORAY_PROJ_SCHEME_2D: u32 = 0;
-/// Nodes tested by the ray against their 3D box.
-pub const CORAY_PROJ_SCHEME_3D: u32 = 1;
+/// How a ray is tested against the nodes: `CORAY_PROJ_SCHEME_*`.
+pub type CorayProjScheme = u32;
+/// The ray's point in the node's rectangle (4 comparisons).
+pub const CORAY_PROJ_SCHEME_2D: CorayProjScheme = 0;
+/// The ray against the node's 3D box.
+pub const CORAY_PROJ_SCHEME_3D: CorayProjScheme = 1;
 /// The rectangle first, the 3D box when the rectangle holds the point.
-pub const CORAY_PROJ_SCHEME_COMBINATION: u32 = 2;
+pub const CORAY_PROJ_SCHEME_COMBINATION: CorayProjScheme = 2;
 
+/// A projection: `CORAY_PLANE_PERSPECTIVE` or `CORAY_PLANE_ORTHOGRAPHIC`.
+pub type CorayPlaneKind = u32;
 /// A central projection.
-pub const CORAY_PLANE_PERSPECTIVE: u32 = 0;
+pub const CORAY_PLANE_PERSPECTIVE: CorayPlaneKind = 0;
 /// A parallel projection.
-pub const CORAY_PLANE_ORTHOGRAPHIC: u32 = 1;
+pub const CORAY_PLANE_ORTHOGRAPHIC: CorayPlaneKind = 1;
 
+/// A light: `CORAY_LIGHT_POINT` or `CORAY_LIGHT_DIRECTIONAL`.
+pub type CorayLightKind = u32;
 /// A point light.
-pub const CORAY_LIGHT_POINT: u32 = 0;
+pub const CORAY_LIGHT_POINT: CorayLightKind = 0;
 /// A directional light.
-pub const CORAY_LIGHT_DIRECTIONAL: u32 = 1;
+pub const CORAY_LIGHT_DIRECTIONAL: CorayLightKind = 1;
 
-/// A projection plane. Get one from [`coray_proj_plane_camera`] or
-/// [`coray_proj_light_planes`].
+/// A projection plane. Get one from `coray_proj_camera_plane` or
+/// `coray_proj_light_planes`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default)]
 pub struct CorayProjPlane {
-    /// `CORAY_PLANE_PERSPECTIVE` or `CORAY_PLANE_ORTHOGRAPHIC`.
-    pub kind: u32,
+    /// `sizeof(CorayProjPlane)`.
+    pub struct_size: usize,
+    /// `CORAY_PLANE_*`.
+    pub kind: CorayPlaneKind,
     /// Centre of projection (perspective).
     pub eye: [f32; 3],
     /// First plane axis.
@@ -63,66 +78,65 @@ pub struct CorayProjPlane {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default)]
 pub struct CorayLight {
-    /// `CORAY_LIGHT_POINT` or `CORAY_LIGHT_DIRECTIONAL`.
-    pub kind: u32,
+    /// `sizeof(CorayLight)`.
+    pub struct_size: usize,
+    /// `CORAY_LIGHT_*`.
+    pub kind: CorayLightKind,
     /// Position or direction.
     pub v: [f32; 3],
 }
 
-/// Parameters of a projection build. Get them from [`coray_proj_params_default`].
+/// Parameters of a projection build. Get them from `coray_proj_params_default`.
 #[repr(C)]
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 pub struct CorayProjParams {
     /// `sizeof(CorayProjParams)`.
     pub struct_size: usize,
-    /// `CORAY_PROJ_CRITERIA_2D` or `CORAY_PROJ_CRITERIA_DUMMY`.
-    pub criteria: u32,
+    /// `CORAY_PROJ_CRITERIA_*`.
+    pub criteria: CorayProjCriteria,
     /// The builder and its settings (`leaf_size` is 1 here; `start_empty`
-    /// must be 0).
+    /// must be 0); its own `struct_size` is set too.
     pub bvh: CorayBvhParams,
 }
 
-/// Arena sizes for a projection hierarchy, from [`coray_proj_requirements`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default)]
-pub struct CorayProjRequirements {
-    /// The hierarchy's arena.
-    pub proj_bytes: usize,
-    /// Build scratch.
-    pub scratch_bytes: usize,
-}
-
-/// What a projection hierarchy holds (read from its arena header, O(1)).
+/// What a projection hierarchy holds, from `coray_proj_info` (O(1)).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default)]
 pub struct CorayProjInfo {
-    /// `CORAY_BVH_*`.
-    pub builder: u32,
+    /// `sizeof(CorayProjInfo)`.
+    pub struct_size: usize,
+    /// `CORAY_BVH_BUILDER_*`.
+    pub builder: CorayBvhBuilder,
     /// `CORAY_PROJ_CRITERIA_*`.
-    pub criteria: u32,
+    pub criteria: CorayProjCriteria,
     /// Nodes in use.
     pub node_count: u32,
     /// Primitives in the hierarchy (2D criteria leave out those that
     /// project to nothing).
-    pub object_count: u32,
+    pub ref_count: u32,
     /// Levels below the root.
     pub depth: u32,
-    /// Bytes of traversal stack the trace calls need (4-byte aligned).
-    pub stack_bytes: usize,
     /// Bytes of the arena the layout covers.
     pub arena_bytes_used: usize,
-    /// The plane.
+    /// Bytes of traversal stack every trace and validate call needs.
+    pub stack_bytes: usize,
+    /// The plane (its `struct_size` set).
     pub plane: CorayProjPlane,
 }
 
-/// Work done by one projection trace call.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default)]
-pub struct CorayProjStats {
-    /// Rays, nodes, primitives and the thesis' costs (a 2D test costs 4).
-    pub bvh: CorayBvhStats,
-    /// How many of `bvh.box_tests` were point-in-rectangle tests.
-    pub rect_tests: u64,
+// SAFETY (all): repr(C), size_t struct_size first, integer and float
+// fields (and nested structs of them) only; as first published.
+unsafe impl Versioned for CorayProjPlane {
+    const SIZE_1_0: usize = size_of::<Self>();
+}
+unsafe impl Versioned for CorayLight {
+    const SIZE_1_0: usize = size_of::<Self>();
+}
+unsafe impl Versioned for CorayProjParams {
+    const SIZE_1_0: usize = size_of::<Self>();
+}
+unsafe impl Versioned for CorayProjInfo {
+    const SIZE_1_0: usize = size_of::<Self>();
 }
 
 fn v3(a: [f32; 3]) -> Vec3 {
@@ -136,6 +150,7 @@ fn plane_to_c(p: &ProjPlane) -> CorayProjPlane {
         ProjPlane::Orthographic { .. } => (CORAY_PLANE_ORTHOGRAPHIC, Vec3::ZERO),
     };
     CorayProjPlane {
+        struct_size: size_of::<CorayProjPlane>(),
         kind,
         eye: eye.into(),
         right: r.into(),
@@ -177,39 +192,46 @@ fn light_from_c(l: &CorayLight) -> Result<Light, CorayStatus> {
     }
 }
 
-/// Writes one value to a caller's out pointer.
-fn put<T>(out: *mut T, v: T) -> Result<(), CorayStatus> {
-    // SAFETY: the caller passes NULL or a valid, writable pointer.
-    *unsafe { carve::output(out, 1)? }
-        .first_mut()
-        .ok_or(CorayStatus::NullPointer)? = v;
-    Ok(())
+fn bounds(lo: &[f32; 3], hi: &[f32; 3]) -> Result<Aabb, CorayStatus> {
+    let b = Aabb {
+        min: v3(*lo),
+        max: v3(*hi),
+    };
+    if !(b.min.is_finite() && b.max.is_finite()) {
+        return Err(CorayStatus::InvalidParameter);
+    }
+    Ok(b)
 }
 
-/// The image plane of `camera`.
+/// The image plane of `camera` (a camera as `coray_kdtree_cast_image` takes it).
 ///
-/// # Safety
-/// `camera` and `out` are NULL or valid pointers to their types.
+/// Safety: `camera` and `out` are NULL or valid pointers to their types.
 #[no_mangle]
-pub unsafe extern "C" fn coray_proj_plane_camera(
+pub unsafe extern "C" fn coray_proj_camera_plane(
     camera_in: *const CorayCamera,
     out: *mut CorayProjPlane,
 ) -> CorayStatus {
     guard(|| {
-        // SAFETY: the caller passes a valid camera pointer or NULL.
-        let cam = camera(unsafe { carve::input_ref(camera_in)? })?;
-        put(out, plane_to_c(&ProjPlane::camera(&cam)))
+        let mut regions = Regions::new();
+        // SAFETY: the caller passes valid pointers or NULL.
+        let (cam, out) = unsafe {
+            (
+                camera(&carve::read(camera_in)?)?,
+                Out::new(out, false, &mut regions)?,
+            )
+        };
+        out.write(plane_to_c(&ProjPlane::camera(&cam)));
+        Ok(())
     })
 }
 
 /// The planes of `light` for a scene inside `[bounds_min, bounds_max]`:
 /// `*count` is 6 (a cube: the point light lies inside the box; face `k`
 /// looks along +x, -x, +y, -y, +z, -z) or 1 (a point light outside it, a
-/// directional light). `planes` holds 6 entries.
+/// directional light). `planes` holds 6 entries, each with `struct_size` set.
 ///
-/// # Safety
-/// `light`, `bounds_min`, `bounds_max` are NULL or readable; `planes`
-/// (6 entries) and `count` NULL or writable.
+/// Safety: `light`, `bounds_min`, `bounds_max` are NULL or readable;
+/// `planes` (6 entries) and `count` NULL or writable.
 #[no_mangle]
 pub unsafe extern "C" fn coray_proj_light_planes(
     light: *const CorayLight,
@@ -219,34 +241,38 @@ pub unsafe extern "C" fn coray_proj_light_planes(
     count: *mut u32,
 ) -> CorayStatus {
     guard(|| {
+        let mut regions = Regions::new();
         // SAFETY: forwarded caller contract for each pointer.
-        let (l, lo, hi) = unsafe {
+        let (l, b) = unsafe {
+            let lo = carve::input(bounds_min, 1)?;
+            let hi = carve::input(bounds_max, 1)?;
             (
-                light_from_c(carve::input_ref(light)?)?,
-                *carve::input_ref(bounds_min)?,
-                *carve::input_ref(bounds_max)?,
+                light_from_c(&carve::read(light)?)?,
+                bounds(
+                    lo.first().ok_or(CorayStatus::NullPointer)?,
+                    hi.first().ok_or(CorayStatus::NullPointer)?,
+                )?,
             )
         };
-        let b = Aabb {
-            min: v3(lo),
-            max: v3(hi),
-        };
-        let lp = LightPlanes::new(l, &b);
         // SAFETY: the caller passes 6 writable planes or NULL.
         let out = unsafe { carve::output(planes, 6)? };
+        regions.add(out.as_ptr(), size_of_val(out), true);
+        let count = OutValue::new(count, false, &mut regions)?;
+        regions.check()?;
+        let lp = LightPlanes::new(l, &b);
         for (o, p) in out.iter_mut().zip(lp.planes.iter()) {
             *o = plane_to_c(p);
         }
-        put(count, lp.count as u32)
+        count.write(lp.count as u32);
+        Ok(())
     })
 }
 
-/// Which of `light`'s planes (from [`coray_proj_light_planes`] with the
-/// same bounds) the shadow ray `ray` uses; `CORAY_STATUS_INVALID_PARAMETER`
-/// when the ray does not run towards the light (ending at it or before).
+/// Which of `light`'s planes (from `coray_proj_light_planes` with the same
+/// bounds) the shadow ray `ray` uses; `CORAY_STATUS_INVALID_PARAMETER` when
+/// the ray does not run towards the light (ending at it or before).
 ///
-/// # Safety
-/// Pointers NULL or valid for their types.
+/// Safety: pointers NULL or valid for their types.
 #[no_mangle]
 pub unsafe extern "C" fn coray_proj_light_plane_for(
     light: *const CorayLight,
@@ -256,31 +282,36 @@ pub unsafe extern "C" fn coray_proj_light_plane_for(
     plane_index: *mut u32,
 ) -> CorayStatus {
     guard(|| {
+        let mut regions = Regions::new();
         // SAFETY: forwarded caller contract for each pointer.
-        let (l, lo, hi, r) = unsafe {
+        let (l, b, r) = unsafe {
+            let lo = carve::input(bounds_min, 1)?;
+            let hi = carve::input(bounds_max, 1)?;
+            let r = carve::input(ray, 1)?;
             (
-                light_from_c(carve::input_ref(light)?)?,
-                *carve::input_ref(bounds_min)?,
-                *carve::input_ref(bounds_max)?,
-                Ray::from(carve::input_ref(ray)?),
+                light_from_c(&carve::read(light)?)?,
+                bounds(
+                    lo.first().ok_or(CorayStatus::NullPointer)?,
+                    hi.first().ok_or(CorayStatus::NullPointer)?,
+                )?,
+                Ray::from(r.first().ok_or(CorayStatus::NullPointer)?),
             )
         };
-        let lp = LightPlanes::new(
-            l,
-            &Aabb {
-                min: v3(lo),
-                max: v3(hi),
-            },
-        );
+        let out = OutValue::new(plane_index, false, &mut regions)?;
+        let lp = LightPlanes::new(l, &b);
         let k = lp.plane_for(&r).ok_or(CorayStatus::InvalidParameter)?;
-        put(plane_index, k as u32)
+        out.write(k as u32);
+        Ok(())
     })
 }
 
-/// Default parameters: `criteria` (`CORAY_PROJ_CRITERIA_*`) with `builder`
-/// (`CORAY_BVH_*`) and its defaults. Unknown values give `struct_size` 0.
+/// Default parameters: `criteria` with `builder` and its defaults; unknown
+/// values give `struct_size` 0, which every call refuses.
 #[no_mangle]
-pub extern "C" fn coray_proj_params_default(criteria: u32, builder: u32) -> CorayProjParams {
+pub extern "C" fn coray_proj_params_default(
+    criteria: CorayProjCriteria,
+    builder: CorayBvhBuilder,
+) -> CorayProjParams {
     let bvh = crate::bvh::coray_bvh_params_default(builder);
     let ok = criteria <= CORAY_PROJ_CRITERIA_DUMMY && bvh.struct_size != 0;
     CorayProjParams {
@@ -290,9 +321,36 @@ pub extern "C" fn coray_proj_params_default(criteria: u32, builder: u32) -> Cora
     }
 }
 
+/// A `CorayProjInfo` to fill, `struct_size` set.
+#[no_mangle]
+pub extern "C" fn coray_proj_info_default() -> CorayProjInfo {
+    CorayProjInfo {
+        struct_size: size_of::<CorayProjInfo>(),
+        ..Default::default()
+    }
+}
+
+/// A `CorayProjPlane` to fill or set, `struct_size` set (the rest zero).
+#[no_mangle]
+pub extern "C" fn coray_proj_plane_default() -> CorayProjPlane {
+    CorayProjPlane {
+        struct_size: size_of::<CorayProjPlane>(),
+        ..Default::default()
+    }
+}
+
+/// A point light at the origin, `struct_size` set.
+#[no_mangle]
+pub extern "C" fn coray_light_default() -> CorayLight {
+    CorayLight {
+        struct_size: size_of::<CorayLight>(),
+        ..Default::default()
+    }
+}
+
 impl CorayProjParams {
-    fn to_core(self) -> Result<(ProjBuilder, Criteria, u32), CorayStatus> {
-        if self.struct_size != size_of::<CorayProjParams>() || self.bvh.start_empty != 0 {
+    fn to_core(self) -> Result<(ProjBuilder, Criteria), CorayStatus> {
+        if self.bvh.start_empty != 0 || self.bvh.struct_size < CorayBvhParams::SIZE_1_0 {
             return Err(CorayStatus::InvalidParameter);
         }
         let criteria = match self.criteria {
@@ -304,133 +362,142 @@ impl CorayProjParams {
             Kind::Static(b, _) => ProjBuilder::Static(b),
             Kind::RTree(p) => ProjBuilder::RTree(p),
         };
-        Ok((b, criteria, self.bvh.builder))
+        Ok((b, criteria))
     }
 }
 
 /// Arena and scratch layouts for `n` primitives.
-struct Layouts {
-    arena: ProjArenaLayout,
-    bvh: BvhScratchLayout,
-    source_offset: usize,
-    stack_offset: usize,
-    stack: usize,
-    scratch_bytes: usize,
-}
-
-fn layouts(n: usize, b: &ProjBuilder) -> Result<Layouts, CorayStatus> {
+fn layouts(n: usize, b: &ProjBuilder) -> Result<(ProjArenaLayout, ProjScratchLayout), CorayStatus> {
+    let too_many = CorayStatus::TooManyPrimitives;
     if n >= MAX_PRIMS {
-        return Err(CorayStatus::TooManyPrimitives);
+        return Err(too_many);
     }
     let r = proj_requirements(n, b);
-    let arena = ProjArenaLayout::of(r.nodes, r.refs, r.prim_rects);
-    if arena.total_bytes > u32::MAX as usize {
-        return Err(CorayStatus::TooManyPrimitives);
-    }
-    let bvh = BvhScratchLayout::of(&r.bvh_scratch);
-    let source_offset = coray::arena::align_up(bvh.total_bytes);
-    let stack_offset = coray::arena::align_up(source_offset + r.source * size_of::<Aabb>());
-    Ok(Layouts {
-        arena,
-        bvh,
-        source_offset,
-        stack_offset,
-        stack: r.stack,
-        scratch_bytes: stack_offset + r.stack * 4,
-    })
+    Ok((
+        ProjArenaLayout::of_requirements(&r).ok_or(too_many)?,
+        ProjScratchLayout::of(&r).ok_or(too_many)?,
+    ))
 }
 
-/// Arena sizes for a projection hierarchy over `prim_count` primitives.
+/// Arena, scratch and stack sizes for a projection hierarchy over
+/// `prim_count` primitives (the arena exactly).
 ///
-/// # Safety
-/// `params` and `out` are NULL or valid pointers to their types.
+/// Safety: `params` and `out` are NULL or valid pointers to their types.
 #[no_mangle]
 pub unsafe extern "C" fn coray_proj_requirements(
     prim_count: usize,
     params: *const CorayProjParams,
-    out: *mut CorayProjRequirements,
+    out: *mut CorayRequirements,
 ) -> CorayStatus {
     guard(|| {
-        // SAFETY: the caller passes a valid params pointer or NULL.
-        let (b, _, _) = unsafe { carve::input_ref(params)? }.to_core()?;
-        let l = layouts(prim_count, &b)?;
-        put(
-            out,
-            CorayProjRequirements {
-                proj_bytes: l.arena.total_bytes,
-                scratch_bytes: l.scratch_bytes,
-            },
-        )
+        let mut regions = Regions::new();
+        // SAFETY: the caller passes valid pointers or NULL.
+        let ((b, _), out) = unsafe {
+            (
+                carve::read(params)?.to_core()?,
+                Out::new(out, false, &mut regions)?,
+            )
+        };
+        let (a, s) = layouts(prim_count, &b)?;
+        let mut bvh_req = CorayRequirements {
+            struct_size: size_of::<CorayRequirements>(),
+            ..Default::default()
+        };
+        // SAFETY: the parameters were read above; bvh_req is a local.
+        let st = unsafe {
+            crate::bvh::coray_bvh_requirements(prim_count, &carve::read(params)?.bvh, &mut bvh_req)
+        };
+        if st != CorayStatus::Ok {
+            return Err(st);
+        }
+        out.write(CorayRequirements {
+            struct_size: 0,
+            arena_min_bytes: a.total_bytes,
+            arena_bytes: a.total_bytes,
+            scratch_min_bytes: s.total_bytes,
+            scratch_bytes: s.total_bytes,
+            stack_bytes: bvh_req.stack_bytes,
+        });
+        Ok(())
     })
 }
 
-/// Builds the projection hierarchy of `scene` on `plane` into
-/// `proj_arena` (exactly `proj_bytes` from [`coray_proj_requirements`] or
-/// more), with `scratch_arena` as scratch. Arenas 16-byte aligned, not
-/// overlapping; `CORAY_STATUS_ARENA_TOO_SMALL` reports the bytes needed.
+/// Builds the projection hierarchy of `scene` on `plane` into `arena`
+/// (`arena_bytes` of the requirements, or more), with `scratch` as scratch.
+/// Both 16-byte aligned, overlapping neither each other nor the scene;
+/// `CORAY_STATUS_ARENA_TOO_SMALL` reports the bytes needed. The part of
+/// the arena the layout covers is written entirely.
 ///
-/// # Safety
-/// Every pointer is NULL or valid for its documented size; the arenas are
-/// not touched by anyone else during the call.
+/// Safety: every pointer is NULL or valid for its documented size; the
+/// arenas are not touched by anyone else during the call.
 #[no_mangle]
 pub unsafe extern "C" fn coray_proj_build(
     scene: *const CorayScene,
     params: *const CorayProjParams,
     plane: *const CorayProjPlane,
-    proj_arena: *mut c_void,
-    proj_bytes: usize,
-    scratch_arena: *mut c_void,
+    arena: *mut c_void,
+    arena_bytes: usize,
+    scratch: *mut c_void,
     scratch_bytes: usize,
     needed_bytes: *mut usize,
 ) -> CorayStatus {
     guard(|| {
+        let mut regions = Regions::new();
         // SAFETY: the caller passes valid pointers or NULL.
         let (scene, p, pl) = unsafe {
             (
-                carve::scene(scene)?,
-                *carve::input_ref(params)?,
-                plane_from_c(carve::input_ref(plane)?)?,
+                carve::scene(scene, &mut regions)?,
+                carve::read(params)?,
+                plane_from_c(&carve::read(plane)?)?,
             )
         };
-        let (builder, criteria, builder_id) = p.to_core()?;
-        let (base, sbase) = (proj_arena.cast::<u8>(), scratch_arena.cast::<u8>());
+        let (builder, criteria) = p.to_core()?;
+        let needed = OutValue::new(needed_bytes, true, &mut regions)?;
+        let (base, sbase) = (arena.cast::<u8>(), scratch.cast::<u8>());
         check_arena(base)?;
         check_arena(sbase)?;
-        let l = layouts(scene.prim_count(), &builder)?;
-        if proj_bytes < l.arena.total_bytes {
-            return too_small(needed_bytes, l.arena.total_bytes);
+        let (a, sl) = layouts(scene.prim_count(), &builder)?;
+        if arena_bytes < a.total_bytes {
+            needed.write(a.total_bytes);
+            return Err(CorayStatus::ArenaTooSmall);
         }
-        if scratch_bytes < l.scratch_bytes {
-            return too_small(needed_bytes, l.scratch_bytes);
+        if scratch_bytes < sl.total_bytes {
+            needed.write(sl.total_bytes);
+            return Err(CorayStatus::ArenaTooSmall);
         }
-        let (a0, s0) = (base as usize, sbase as usize);
-        if a0 < s0 + l.scratch_bytes && s0 < a0 + l.arena.total_bytes {
-            return Err(CorayStatus::InvalidParameter);
-        }
+        regions
+            .add(base, a.total_bytes, true)
+            .add(sbase, sl.total_bytes, true)
+            .check()?;
         scene.check()?;
-        let (a, c) = (&l.arena, &l.bvh.counts);
+        let c = &sl.bvh.counts;
         // SAFETY: both arenas passed check_arena; each layout lies within
         // its arena (checked above); parts are disjoint (layout formulas,
-        // 16-aligned offsets) and the arenas do not overlap (checked); the
-        // caller lends both exclusively for the call.
+        // 16-aligned offsets) and the arenas overlap neither each other nor
+        // the scene (Regions); the caller lends both exclusively.
         let (header, storage, scratch) = unsafe {
+            carve::zero(base, a.total_bytes);
             (
-                slice_mut::<ProjArenaHeader>(base, 0, 1),
+                carve::arena_mut::<ProjArenaHeader>(base, 0, 1),
                 ProjStorage {
-                    nodes: slice_mut::<BvhNode>(base, a.nodes_offset, a.nodes),
-                    refs: slice_mut::<u32>(base, a.refs_offset, a.refs),
-                    rects: slice_mut::<Rect>(base, a.rects_offset, a.nodes),
-                    prim_rects: slice_mut::<Rect>(base, a.prim_rects_offset, a.prim_rects),
+                    nodes: carve::arena_mut::<BvhNode>(base, a.nodes_offset, a.nodes),
+                    refs: carve::arena_mut::<u32>(base, a.refs_offset, a.refs),
+                    rects: carve::arena_mut::<Rect>(base, a.rects_offset, a.nodes),
+                    prim_rects: carve::arena_mut::<Rect>(base, a.prim_rects_offset, a.prim_rects),
                 },
                 ProjScratch {
                     bvh: BvhScratch {
-                        boxes: slice_mut::<Aabb>(sbase, 0, c.boxes),
-                        keys: slice_mut::<f32>(sbase, l.bvh.keys_offset, c.keys),
-                        links: slice_mut::<u32>(sbase, l.bvh.links_offset, c.links),
-                        clusters: slice_mut::<BvhNode>(sbase, l.bvh.clusters_offset, c.clusters),
+                        boxes: carve::arena_mut::<Aabb>(sbase, 0, c.boxes),
+                        keys: carve::arena_mut::<f32>(sbase, sl.bvh.keys_offset, c.keys),
+                        links: carve::arena_mut::<u32>(sbase, sl.bvh.links_offset, c.links),
+                        clusters: carve::arena_mut::<BvhNode>(
+                            sbase,
+                            sl.bvh.clusters_offset,
+                            c.clusters,
+                        ),
                     },
-                    source: slice_mut::<Aabb>(sbase, l.source_offset, scene.prim_count()),
-                    stack: slice_mut::<u32>(sbase, l.stack_offset, l.stack),
+                    source: carve::arena_mut::<Aabb>(sbase, sl.source_offset, sl.source),
+                    stack: carve::arena_mut::<u32>(sbase, sl.stack_offset, sl.stack),
                 },
             )
         };
@@ -438,10 +505,13 @@ pub unsafe extern "C" fn coray_proj_build(
         let mut hd = ProjArenaHeader {
             magic: PROJ_MAGIC,
             version: PROJ_VERSION,
-            builder: builder_id,
+            builder: match builder {
+                ProjBuilder::Static(b) => code::of_static(b),
+                ProjBuilder::RTree(r) => code::of_rtree(&r),
+            },
             criteria: p.criteria,
             scene_counts: scene_counts(&scene),
-            info: h.bvh.info,
+            info: *h.bvh().info(),
             layout_bytes: a.total_bytes as u32,
             nodes_cap: a.nodes as u32,
             refs_cap: a.refs as u32,
@@ -454,119 +524,172 @@ pub unsafe extern "C" fn coray_proj_build(
     })
 }
 
-/// The hierarchy in an arena, for reading (O(1) checks).
+/// Opens the projection hierarchy in `arena` with the scene it was built
+/// on: O(1) checks, then `*out` is the handle every other call takes. The
+/// arena and the scene's arrays stay in place and unchanged while the
+/// handle is used. Validate an arena from untrusted storage once.
 ///
-/// # Safety
-/// `arena` is NULL or valid for reads of `bytes` bytes nobody writes during `'a`.
-unsafe fn view<'a>(
-    arena: *const c_void,
-    bytes: usize,
-    scene: Scene<'a>,
-) -> Result<(ProjArenaHeader, ProjHierarchy<'a>), CorayStatus> {
-    let base = arena.cast::<u8>();
-    check_arena(base)?;
-    if bytes < PROJ_HEADER_BYTES {
-        return Err(CorayStatus::CorruptArena);
-    }
-    // SAFETY: aligned, readable for at least one header.
-    let h = unsafe { slice_ref::<ProjArenaHeader>(base, 0, 1)[0] };
-    let l = h.layout(bytes)?;
-    if scene_counts(&scene) != h.scene_counts || l.prim_rects < scene.prim_count() {
-        return Err(CorayStatus::SceneMismatch);
-    }
-    // SAFETY: the layout lies within `bytes` (checked by layout()), offsets
-    // are multiples of 16, and the arena is only read.
-    let (nodes, refs, rects, prim_rects) = unsafe {
-        (
-            slice_ref::<BvhNode>(base, l.nodes_offset, l.nodes),
-            slice_ref::<u32>(base, l.refs_offset, l.refs),
-            slice_ref::<Rect>(base, l.rects_offset, l.nodes),
-            slice_ref::<Rect>(base, l.prim_rects_offset, l.prim_rects),
-        )
-    };
-    Ok((
-        h,
-        ProjHierarchy {
-            bvh: Bvh {
-                scene,
-                nodes,
-                refs,
-                info: h.info,
-            },
-            rects,
-            prim_rects,
-            plane: h.plane(),
-        },
-    ))
-}
-
-/// What the hierarchy in `proj_arena` holds (O(1)).
-///
-/// # Safety
-/// `proj_arena` is valid for reads of `proj_bytes`; `out` NULL or writable.
+/// Safety: `arena` is NULL or readable for `arena_bytes`; `scene` and
+/// `out` NULL or valid.
 #[no_mangle]
-pub unsafe extern "C" fn coray_proj_info(
-    proj_arena: *const c_void,
-    proj_bytes: usize,
-    out: *mut CorayProjInfo,
+pub unsafe extern "C" fn coray_proj_open(
+    arena: *const c_void,
+    arena_bytes: usize,
+    scene: *const CorayScene,
+    out: *mut CorayProj,
 ) -> CorayStatus {
     guard(|| {
-        let base = proj_arena.cast::<u8>();
+        let mut regions = Regions::new();
+        // SAFETY: forwarded caller contract.
+        let scene = unsafe { carve::scene(scene, &mut regions)? };
+        carve::check_array(out, 1)?;
+        regions.add(out, size_of::<CorayProj>(), true);
+        let base = arena.cast::<u8>();
         check_arena(base)?;
-        if proj_bytes < PROJ_HEADER_BYTES {
+        if arena_bytes < PROJ_HEADER_BYTES {
             return Err(CorayStatus::CorruptArena);
         }
+        regions.add(base, arena_bytes, false).check()?;
         // SAFETY: aligned, readable for at least one header.
-        let h = unsafe { slice_ref::<ProjArenaHeader>(base, 0, 1)[0] };
-        let l = h.layout(proj_bytes)?;
-        let i = &h.info;
-        let stack = Bvh {
-            scene: Scene::default(),
-            nodes: &[],
-            refs: &[],
-            info: *i,
+        let h = unsafe { carve::arena_ref::<ProjArenaHeader>(base, 0, 1)[0] };
+        let l = h.layout(arena_bytes)?;
+        check_scene(h.scene_counts, &scene)?;
+        if code::to_static(h.builder).is_none() && !code::is_rtree(h.builder) {
+            return Err(CorayStatus::CorruptArena);
         }
-        .stack_len();
-        put(
-            out,
-            CorayProjInfo {
-                builder: h.builder,
-                criteria: h.criteria,
-                node_count: i.node_count,
-                object_count: i.ref_count,
-                depth: i.depth,
-                stack_bytes: stack * size_of::<bvh::BvhStackItem>(),
-                arena_bytes_used: l.total_bytes,
-                plane: plane_to_c(&h.plane()),
-            },
-        )
-    })
-}
-
-/// Checks the hierarchy against `scene` (O(size)): the 3D side as
-/// [`crate::coray_bvh_validate`] does, every rectangle the union of its
-/// entries', every primitive's the projection of its box.
-///
-/// # Safety
-/// As [`coray_proj_info`]; `scene` is valid.
-#[no_mangle]
-pub unsafe extern "C" fn coray_proj_validate(
-    proj_arena: *const c_void,
-    proj_bytes: usize,
-    scene: *const CorayScene,
-) -> CorayStatus {
-    guard(|| {
-        // SAFETY: forwarded caller contract.
-        let (_, t) = unsafe { view(proj_arena, proj_bytes, carve::scene(scene)?)? };
-        // An R-tree's fill rule is not checked here: its m is not kept in
-        // the arena, and tracing relies on the structure, boxes and
-        // rectangles only.
-        t.validate(None)?;
+        let mut hd = Handle {
+            kind: KIND_PROJ,
+            arena: base as usize,
+            arena_bytes: l.total_bytes,
+            ..Handle::default()
+        };
+        hd.set_scene(&scene);
+        hd.parts[0] = (0, 1);
+        hd.parts[1] = (l.nodes_offset, l.nodes);
+        hd.parts[2] = (l.refs_offset, l.refs);
+        hd.parts[3] = (l.rects_offset, l.nodes);
+        hd.parts[4] = (l.prim_rects_offset, l.prim_rects);
+        // SAFETY: the handle describes the arena just checked, readable.
+        unsafe { view_of(&hd, scene)? };
+        // SAFETY: out checked non-null, aligned, disjoint from the arena.
+        unsafe { out.write(CorayProj { opaque: hd.words() }) };
         Ok(())
     })
 }
 
-fn scheme(s: u32) -> Result<ProjScheme, CorayStatus> {
+/// The header and hierarchy a handle describes, over `scene`.
+///
+/// Safety: the handle's arena is readable and unchanged during `'a`.
+unsafe fn view_of<'a>(
+    h: &Handle,
+    scene: Scene<'a>,
+) -> Result<(ProjArenaHeader, ProjHierarchy<'a>), CorayStatus> {
+    // SAFETY: the handle's parts lie within its arena (Handle::part
+    // checks), readable by the caller's contract.
+    unsafe {
+        let header = h.part::<ProjArenaHeader>(0)?[0];
+        if header.plane_kind > 1 || !header.plane.iter().all(|x| x.is_finite()) {
+            return Err(CorayStatus::CorruptArena);
+        }
+        let b = Bvh::from_parts(scene, h.part(1)?, h.part(2)?, header.info)?;
+        let p = ProjHierarchy::from_parts(b, h.part(3)?, h.part(4)?, header.plane())?;
+        Ok((header, p))
+    }
+}
+
+/// The hierarchy behind a caller's handle, its buffers noted in `regions`.
+///
+/// Safety: `t` is NULL or a handle `coray_proj_open` filled, whose arena
+/// and scene are still in place and unchanged during `'a`.
+unsafe fn open<'a>(
+    t: *const CorayProj,
+    regions: &mut Regions,
+) -> Result<(ProjArenaHeader, ProjHierarchy<'a>), CorayStatus> {
+    // SAFETY: forwarded contract.
+    unsafe {
+        let h = handle::read(t.cast(), KIND_PROJ, regions)?;
+        regions.add(h.arena as *const u8, h.arena_bytes, false);
+        let scene = h.scene(regions);
+        view_of(&h, scene)
+    }
+}
+
+/// What the hierarchy holds (O(1)).
+///
+/// Safety: `proj` is a handle `coray_proj_open` filled; `out` NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn coray_proj_info(
+    proj: *const CorayProj,
+    out: *mut CorayProjInfo,
+) -> CorayStatus {
+    guard(|| {
+        let mut regions = Regions::new();
+        // SAFETY: forwarded caller contract.
+        let ((h, p), out) = unsafe {
+            (
+                open(proj, &mut regions)?,
+                Out::new(out, false, &mut regions)?,
+            )
+        };
+        regions.check()?;
+        let i = p.bvh().info();
+        out.write(CorayProjInfo {
+            struct_size: 0,
+            builder: h.builder,
+            criteria: h.criteria,
+            node_count: i.node_count,
+            ref_count: i.ref_count,
+            depth: i.depth,
+            arena_bytes_used: h.layout_bytes as usize,
+            stack_bytes: p.stack_len().saturating_mul(size_of::<BvhStackItem>()),
+            plane: plane_to_c(p.plane()),
+        });
+        Ok(())
+    })
+}
+
+/// Checks the hierarchy against its scene in linear time, never crashing:
+/// the 3D side as `coray_bvh_validate` does (an R-tree's fill rule aside:
+/// its m is not kept), every rectangle the union of its entries', every
+/// primitive's the projection of its box. `stack` as for the trace calls;
+/// `out` may be NULL.
+///
+/// Safety: as `coray_proj_info`; `stack` writable for `stack_bytes`.
+#[no_mangle]
+pub unsafe extern "C" fn coray_proj_validate(
+    proj: *const CorayProj,
+    stack: *mut c_void,
+    stack_bytes: usize,
+    out: *mut CorayShape,
+) -> CorayStatus {
+    guard(|| {
+        let mut regions = Regions::new();
+        // SAFETY: forwarded caller contract.
+        let ((_, p), out) = unsafe {
+            (
+                open(proj, &mut regions)?,
+                Out::new(out, true, &mut regions)?,
+            )
+        };
+        // SAFETY: forwarded caller contract: a writable stack.
+        let stk = unsafe {
+            carve::stack::<BvhStackItem>(stack, stack_bytes, p.stack_len(), &mut regions)?
+        };
+        regions.check()?;
+        let s = Accel::validate(&p, stk)?;
+        out.write(CorayShape {
+            struct_size: 0,
+            node_count: s.nodes,
+            leaf_count: s.leaves,
+            empty_leaf_count: 0,
+            ref_count: s.refs,
+            depth: s.depth,
+        });
+        Ok(())
+    })
+}
+
+fn scheme(s: CorayProjScheme) -> Result<ProjScheme, CorayStatus> {
     match s {
         CORAY_PROJ_SCHEME_2D => Ok(ProjScheme::TwoD),
         CORAY_PROJ_SCHEME_3D => Ok(ProjScheme::ThreeD),
@@ -575,143 +698,157 @@ fn scheme(s: u32) -> Result<ProjScheme, CorayStatus> {
     }
 }
 
-fn put_stats(out: *mut CorayProjStats, s: &ProjStats) -> Result<(), CorayStatus> {
-    if out.is_null() {
-        return Ok(());
-    }
-    let b = &s.bvh;
-    put(
-        out,
-        CorayProjStats {
-            bvh: CorayBvhStats {
-                trace: b.trace.into(),
-                box_tests: b.box_tests,
-                box_cost: b.box_cost,
-                prim_cost: b.prim_cost,
-            },
-            rect_tests: s.rect_tests,
-        },
-    )
-}
-
-/// Closest hits of `count` rays by `scheme_id` (`CORAY_PROJ_SCHEME_*`).
-/// Every ray must lie on a line through the plane's eye: a camera ray that
-/// starts at the eye, or a ray towards the eye that ends at it or before
-/// (for an orthographic plane: against its direction). Otherwise nothing is
-/// written and the status is `CORAY_STATUS_INVALID_PARAMETER`: trace such
-/// rays through a 3D hierarchy. `stack` as for [`crate::coray_bvh_intersect`].
+/// The body of every trace entry point: checks the handle, the arrays, the
+/// stack, the statistics and that every ray lies on a line through the
+/// plane's eye, before anything is written; then writes `answer` per ray.
 ///
-/// # Safety
-/// As [`crate::coray_bvh_intersect`].
-#[no_mangle]
-pub unsafe extern "C" fn coray_proj_intersect(
-    proj_arena: *const c_void,
-    proj_bytes: usize,
-    scene: *const CorayScene,
-    scheme_id: u32,
-    rays: *const CorayRay,
-    hits: *mut CorayHit,
-    count: usize,
-    stack_mem: *mut c_void,
-    stack_bytes: usize,
-    stats: *mut CorayProjStats,
-) -> CorayStatus {
-    // SAFETY: forwarded caller contract.
-    unsafe {
-        batch(
-            proj_arena,
-            proj_bytes,
-            scene,
-            scheme_id,
-            rays,
-            hits,
-            count,
-            stack_mem,
-            stack_bytes,
-            stats,
-            |t, r, sch, stk, st| t.intersect(r, sch, stk, st).map(Into::into),
-        )
-    }
-}
-
-/// Any-hit queries (shadow rays towards the plane's light), as
-/// [`coray_proj_intersect`]: `occluded[i]` is 1 when something lies on
-/// `rays[i]` within `[tnear, tfar]`.
-///
-/// # Safety
-/// As [`coray_proj_intersect`], with `occluded` holding `count` bytes.
-#[no_mangle]
-pub unsafe extern "C" fn coray_proj_occluded(
-    proj_arena: *const c_void,
-    proj_bytes: usize,
-    scene: *const CorayScene,
-    scheme_id: u32,
-    rays: *const CorayRay,
-    occluded: *mut u8,
-    count: usize,
-    stack_mem: *mut c_void,
-    stack_bytes: usize,
-    stats: *mut CorayProjStats,
-) -> CorayStatus {
-    // SAFETY: forwarded caller contract.
-    unsafe {
-        batch(
-            proj_arena,
-            proj_bytes,
-            scene,
-            scheme_id,
-            rays,
-            occluded,
-            count,
-            stack_mem,
-            stack_bytes,
-            stats,
-            |t, r, sch, stk, st| t.occluded(r, sch, stk, st).map(u8::from),
-        )
-    }
-}
-
-/// The body of [`coray_proj_intersect`] and [`coray_proj_occluded`]: views
-/// the arena, carves rays, answers, stack and statistics, refuses the
-/// batch (writing nothing) when a ray does not pass the plane's eye, and
-/// writes `answer` for each ray.
-///
-/// # Safety
-/// As [`coray_proj_intersect`], with `out` holding `count` elements.
+/// Safety: as `coray_proj_intersect`, with `out` holding `count` `O`s.
 #[allow(clippy::too_many_arguments)]
 unsafe fn batch<O>(
-    proj_arena: *const c_void,
-    proj_bytes: usize,
-    scene: *const CorayScene,
-    scheme_id: u32,
+    proj: *const CorayProj,
+    scheme_id: CorayProjScheme,
     rays: *const CorayRay,
     out: *mut O,
     count: usize,
-    stack_mem: *mut c_void,
+    stack: *mut c_void,
     stack_bytes: usize,
-    stats: *mut CorayProjStats,
-    answer: impl Fn(&ProjHierarchy, &Ray, ProjScheme, &mut [BvhStackItem], &mut ProjStats) -> Option<O>,
+    stats: *mut CorayTraceStats,
+    answer: impl Fn(&ProjHierarchy, &Ray, ProjScheme, &mut [BvhStackItem], &mut TraceStats) -> Option<O>,
 ) -> CorayStatus {
     guard(|| {
         let s = scheme(scheme_id)?;
+        let mut regions = Regions::new();
         // SAFETY: forwarded caller contract for every pointer.
-        let (t, rays, out) = unsafe {
-            (
-                view(proj_arena, proj_bytes, carve::scene(scene)?)?.1,
-                carve::input(rays, count)?,
-                carve::output(out, count)?,
-            )
+        let (p, rays, out, stk, stats) = unsafe {
+            let (_, p) = open(proj, &mut regions)?;
+            let rays = carve::input(rays, count)?;
+            regions.add(rays.as_ptr(), size_of_val(rays), false);
+            let out = carve::output(out, count)?;
+            regions.add(out.as_ptr(), size_of_val(out), true);
+            let need = if count == 0 { 0 } else { p.stack_len() };
+            let stk = carve::stack::<BvhStackItem>(stack, stack_bytes, need, &mut regions)?;
+            (p, rays, out, stk, Out::new(stats, true, &mut regions)?)
         };
-        // SAFETY: forwarded caller contract.
-        let stk = unsafe { stack(&t.bvh, stack_mem, stack_bytes)? };
-        if rays.iter().any(|r| t.project(&r.into()).is_none()) {
+        regions.check()?;
+        if rays.iter().any(|r| p.project(&r.into()).is_none()) {
             return Err(CorayStatus::InvalidParameter);
         }
-        let mut st = ProjStats::default();
+        let mut st = TraceStats::default();
         for (r, o) in rays.iter().zip(out.iter_mut()) {
-            // The rays were checked: a refusal here is a defect.
-            *o = answer(&t, &r.into(), s, stk, &mut st).ok_or(CorayStatus::InternalError)?;
+            // Every ray was checked: a refusal here would be a defect.
+            *o = answer(&p, &r.into(), s, stk, &mut st).ok_or(CorayStatus::InternalError)?;
         }
-        put_stats(stats, &st)
+        if st.faults > 0 {
+            return Err(CorayStatus::CorruptArena);
+        }
+        stats.write(CorayTraceStats::of(&st));
+        Ok(())
     })
+}
+
+/// Closest hits of `count` rays by `scheme`. Every ray must lie on a line
+/// through the plane's eye: a camera ray that starts at the eye, or a ray
+/// towards the eye that ends at it or before (for an orthographic plane:
+/// against its direction). Otherwise nothing is written and the status is
+/// `CORAY_STATUS_INVALID_PARAMETER`: trace such rays through a 3D
+/// hierarchy. `stack` and `stats` as for `coray_bvh_intersect`.
+///
+/// Safety: as `coray_bvh_intersect`, with `proj` a handle `coray_proj_open` filled.
+#[no_mangle]
+pub unsafe extern "C" fn coray_proj_intersect(
+    proj: *const CorayProj,
+    scheme: CorayProjScheme,
+    rays: *const CorayRay,
+    hits: *mut CorayHit,
+    count: usize,
+    stack: *mut c_void,
+    stack_bytes: usize,
+    stats: *mut CorayTraceStats,
+) -> CorayStatus {
+    // SAFETY: forwarded caller contract.
+    unsafe {
+        batch(
+            proj,
+            scheme,
+            rays,
+            hits,
+            count,
+            stack,
+            stack_bytes,
+            stats,
+            |p, r, s, stk, st| p.intersect(r, s, stk, st).map(Into::into),
+        )
+    }
+}
+
+/// `coray_proj_intersect` for one ray.
+///
+/// Safety: as `coray_proj_intersect` with `count` 1.
+#[no_mangle]
+pub unsafe extern "C" fn coray_proj_intersect1(
+    proj: *const CorayProj,
+    scheme: CorayProjScheme,
+    ray: *const CorayRay,
+    hit: *mut CorayHit,
+    stack: *mut c_void,
+    stack_bytes: usize,
+    stats: *mut CorayTraceStats,
+) -> CorayStatus {
+    if ray.is_null() || hit.is_null() {
+        return CorayStatus::NullPointer;
+    }
+    // SAFETY: forwarded caller contract.
+    unsafe { coray_proj_intersect(proj, scheme, ray, hit, 1, stack, stack_bytes, stats) }
+}
+
+/// Any-hit queries (shadow rays towards the plane's light), as
+/// `coray_proj_intersect`: `occluded[i]` is 1 when something lies on
+/// `rays[i]` within `[tnear, tfar]`.
+///
+/// Safety: as `coray_proj_intersect`, with `occluded` holding `count` bytes.
+#[no_mangle]
+pub unsafe extern "C" fn coray_proj_occluded(
+    proj: *const CorayProj,
+    scheme: CorayProjScheme,
+    rays: *const CorayRay,
+    occluded: *mut u8,
+    count: usize,
+    stack: *mut c_void,
+    stack_bytes: usize,
+    stats: *mut CorayTraceStats,
+) -> CorayStatus {
+    // SAFETY: forwarded caller contract.
+    unsafe {
+        batch(
+            proj,
+            scheme,
+            rays,
+            occluded,
+            count,
+            stack,
+            stack_bytes,
+            stats,
+            |p, r, s, stk, st| p.occluded(r, s, stk, st).map(u8::from),
+        )
+    }
+}
+
+/// `coray_proj_occluded` for one ray.
+///
+/// Safety: as `coray_proj_occluded` with `count` 1.
+#[no_mangle]
+pub unsafe extern "C" fn coray_proj_occluded1(
+    proj: *const CorayProj,
+    scheme: CorayProjScheme,
+    ray: *const CorayRay,
+    occluded: *mut u8,
+    stack: *mut c_void,
+    stack_bytes: usize,
+    stats: *mut CorayTraceStats,
+) -> CorayStatus {
+    if ray.is_null() || occluded.is_null() {
+        return CorayStatus::NullPointer;
+    }
+    // SAFETY: forwarded caller contract.
+    unsafe { coray_proj_occluded(proj, scheme, ray, occluded, 1, stack, stack_bytes, stats) }
 }

@@ -1,7 +1,10 @@
-//! Issue 16's C-ABI findings, each as a test: aliasing, outputs written on
-//! a failing call, statuses that differ between families.
+//! Issue 16's C-ABI findings, each as a test (written against the ABI of
+//! e4d0fb4 first, where all failed, then carried to ABI 1.0): aliasing,
+//! outputs written on a failing call, statuses that differ between
+//! families, the sample count that wrapped.
 use coray_ffi::*;
 use core::ffi::c_void;
+use core::mem::size_of;
 
 #[repr(C, align(16))]
 #[derive(Clone, Copy)]
@@ -32,29 +35,39 @@ fn scene(f: &Floor) -> CorayScene {
     s
 }
 
-fn kd(s: &CorayScene) -> (Vec<Block>, usize) {
-    let p = coray_kd_params_default(CORAY_KD_PRESET_AUTO);
-    let mut r = CorayKdRequirements::default();
+fn requirements() -> CorayRequirements {
+    CorayRequirements {
+        struct_size: size_of::<CorayRequirements>(),
+        ..Default::default()
+    }
+}
+
+/// A kd-tree over `s`, opened.
+fn kd(s: &CorayScene) -> (Vec<Block>, CorayKdTree) {
+    let p = coray_kdtree_params_default(CORAY_KD_PRESET_AUTO);
+    let mut r = requirements();
     unsafe {
-        assert_eq!(
-            coray_kdtree_requirements(2, &p, &mut r),
-            CorayStatus::Ok
-        );
-        let mut t = arena(r.tree_bytes);
+        assert_eq!(coray_kdtree_requirements(2, &p, &mut r), CorayStatus::Ok);
+        let mut t = arena(r.arena_bytes);
         let mut sc = arena(r.scratch_bytes);
         assert_eq!(
             coray_kdtree_build(
                 s,
                 &p,
                 t.as_mut_ptr().cast(),
-                r.tree_bytes,
+                r.arena_bytes,
                 sc.as_mut_ptr().cast(),
                 r.scratch_bytes,
                 core::ptr::null_mut()
             ),
             CorayStatus::Ok
         );
-        (t, r.tree_bytes)
+        let mut h = CorayKdTree { opaque: [0; 32] };
+        assert_eq!(
+            coray_kdtree_open(t.as_ptr().cast(), r.arena_bytes, s, &mut h),
+            CorayStatus::Ok
+        );
+        (t, h)
     }
 }
 
@@ -72,19 +85,20 @@ fn down() -> CorayRay {
 fn rays_and_hits_may_not_overlap() {
     let f = floor();
     let s = scene(&f);
-    let (t, bytes) = kd(&s);
+    let (_a, t) = kd(&s);
+    let mut stack = arena(CORAY_KDTREE_STACK_BYTES);
     let mut buf = [Block([0; 16]); 8];
     let rays = buf.as_mut_ptr().cast::<CorayRay>();
     unsafe {
         *rays = down();
         let st = coray_kdtree_intersect(
-            t.as_ptr().cast(),
-            bytes,
-            &s,
+            &t,
             CORAY_TRAVERSAL_HIERARCHICAL,
             rays,
             rays.cast::<CorayHit>(),
             1,
+            stack.as_mut_ptr().cast(),
+            CORAY_KDTREE_STACK_BYTES,
             core::ptr::null_mut(),
         );
         assert_eq!(st, CorayStatus::InvalidParameter);
@@ -96,23 +110,30 @@ fn rays_and_hits_may_not_overlap() {
 fn a_misaligned_stats_pointer_writes_no_hit() {
     let f = floor();
     let s = scene(&f);
-    let (t, bytes) = kd(&s);
+    let (_a, t) = kd(&s);
+    let mut stack = arena(CORAY_KDTREE_STACK_BYTES);
     let ray = down();
     let mut hit = CorayHit {
         t: -7.0,
         ..Default::default()
     };
-    let mut stats = [0u64; 16];
-    let bad = unsafe { stats.as_mut_ptr().cast::<u8>().add(1).cast::<CorayTraceStats>() };
+    let mut stats = [0u64; 32];
+    let bad = unsafe {
+        stats
+            .as_mut_ptr()
+            .cast::<u8>()
+            .add(1)
+            .cast::<CorayTraceStats>()
+    };
     let st = unsafe {
         coray_kdtree_intersect(
-            t.as_ptr().cast(),
-            bytes,
-            &s,
+            &t,
             CORAY_TRAVERSAL_HIERARCHICAL,
             &ray,
             &mut hit,
             1,
+            stack.as_mut_ptr().cast(),
+            CORAY_KDTREE_STACK_BYTES,
             bad,
         )
     };
@@ -125,32 +146,50 @@ fn a_misaligned_stats_pointer_writes_no_hit() {
 fn zero_rays_need_no_stack() {
     let f = floor();
     let s = scene(&f);
-    let p = coray_bvh_params_default(CORAY_BVH_TDBS);
-    let mut r = CorayBvhRequirements::default();
+    let (_a, t) = kd(&s);
+    let p = coray_bvh_params_default(CORAY_BVH_BUILDER_TDBS);
+    let mut r = requirements();
+    let null = core::ptr::null_mut::<c_void>();
     unsafe {
+        assert_eq!(
+            coray_kdtree_intersect(
+                &t,
+                0,
+                core::ptr::null(),
+                core::ptr::null_mut(),
+                0,
+                null,
+                0,
+                core::ptr::null_mut()
+            ),
+            CorayStatus::Ok
+        );
         assert_eq!(coray_bvh_requirements(2, &p, &mut r), CorayStatus::Ok);
-        let mut a = arena(r.bvh_bytes);
+        let mut a = arena(r.arena_bytes);
         let mut sc = arena(r.scratch_bytes);
         assert_eq!(
             coray_bvh_build(
                 &s,
                 &p,
                 a.as_mut_ptr().cast(),
-                r.bvh_bytes,
+                r.arena_bytes,
                 sc.as_mut_ptr().cast(),
                 r.scratch_bytes,
                 core::ptr::null_mut()
             ),
             CorayStatus::Ok
         );
+        let mut h = CorayBvh { opaque: [0; 32] };
+        assert_eq!(
+            coray_bvh_open(a.as_ptr().cast(), r.arena_bytes, &s, &mut h),
+            CorayStatus::Ok
+        );
         let st = coray_bvh_intersect(
-            a.as_ptr().cast(),
-            r.bvh_bytes,
-            &s,
+            &h,
             core::ptr::null(),
             core::ptr::null_mut(),
             0,
-            core::ptr::null_mut(),
+            null,
             0,
             core::ptr::null_mut(),
         );
@@ -164,81 +203,92 @@ fn zero_rays_need_no_stack() {
 fn corrupt_rtree_parameters_are_a_corrupt_arena() {
     let f = floor();
     let s = scene(&f);
-    let p = coray_bvh_params_default(CORAY_BVH_RTREE);
-    let mut r = CorayBvhRequirements::default();
+    let p = coray_bvh_params_default(CORAY_BVH_BUILDER_RTREE);
+    let mut r = requirements();
     unsafe {
         assert_eq!(coray_bvh_requirements(2, &p, &mut r), CorayStatus::Ok);
-        let mut a = arena(r.bvh_bytes);
+        let mut a = arena(r.arena_bytes);
         let mut sc = arena(r.scratch_bytes);
         assert_eq!(
             coray_bvh_build(
                 &s,
                 &p,
                 a.as_mut_ptr().cast(),
-                r.bvh_bytes,
+                r.arena_bytes,
                 sc.as_mut_ptr().cast(),
                 r.scratch_bytes,
                 core::ptr::null_mut()
             ),
             CorayStatus::Ok
         );
-        // max_children sits after magic, version, builder, 3 counts and the 6-word info.
+        // max_children: after magic, version, builder, 3 counts and the 8-word info.
         let words = a.as_mut_ptr().cast::<u32>();
-        *words.add(12) = 1000;
-        let st = coray_bvh_validate(a.as_ptr().cast(), r.bvh_bytes, &s, core::ptr::null_mut());
+        assert_eq!(*words.add(14), 8);
+        *words.add(14) = 1000;
+        let mut h = CorayBvh { opaque: [0; 32] };
+        let st = coray_bvh_open(a.as_ptr().cast(), r.arena_bytes, &s, &mut h);
         assert_eq!(st, CorayStatus::CorruptArena);
-        let st = coray_bvh_insert(a.as_mut_ptr().cast(), r.bvh_bytes, &s, 0);
+        let st = coray_bvh_insert(
+            a.as_mut_ptr().cast(),
+            r.arena_bytes,
+            &s,
+            CORAY_GEOM_TRIANGLES,
+            0,
+        );
         assert_eq!(st, CorayStatus::CorruptArena);
     }
 }
 
-/// Cast scratch inside the tree arena: rejected.
-#[test]
-fn cast_scratch_inside_the_tree_is_rejected() {
-    let f = floor();
-    let s = scene(&f);
-    let (mut t, bytes) = kd(&s);
-    let cam = CorayCamera {
-        struct_size: core::mem::size_of::<CorayCamera>(),
+fn camera() -> CorayCamera {
+    CorayCamera {
+        struct_size: size_of::<CorayCamera>(),
         from: [0.0, 5.0, -5.0],
         at: [0.0, 0.0, 0.0],
         up: [0.0, 1.0, 0.0],
         angle_deg: 60.0,
         width: 4,
         height: 4,
-    };
+    }
+}
+
+/// Cast scratch inside the tree arena, or over the hits: rejected.
+#[test]
+fn cast_scratch_may_not_overlap_the_tree_or_the_hits() {
+    let f = floor();
+    let s = scene(&f);
+    let (mut a, t) = kd(&s);
+    let mut stack = arena(CORAY_KDTREE_STACK_BYTES);
+    let cam = camera();
     let p = coray_cast_params_default();
-    let mut need = 0usize;
+    let mut r = requirements();
     unsafe {
-        assert_eq!(coray_cast_requirements(&cam, &p, &mut need), CorayStatus::Ok);
-        let mut ts = [0f32; 16];
-        let mut ps = [0u32; 16];
+        assert_eq!(
+            coray_kdtree_cast_requirements(&cam, &p, &mut r),
+            CorayStatus::Ok
+        );
+        let mut hits = [CorayHit::default(); 16];
         let st = coray_kdtree_cast_image(
-            t.as_ptr().cast(),
-            bytes,
-            &s,
+            &t,
             &cam,
             &p,
-            t.as_mut_ptr().cast::<c_void>(),
-            need,
-            ts.as_mut_ptr(),
-            ps.as_mut_ptr(),
+            a.as_mut_ptr().cast::<c_void>(),
+            r.scratch_bytes,
+            stack.as_mut_ptr().cast(),
+            CORAY_KDTREE_STACK_BYTES,
+            hits.as_mut_ptr(),
             core::ptr::null_mut(),
         );
         assert_eq!(st, CorayStatus::InvalidParameter);
-        // And the two outputs in one buffer.
-        let mut sc = arena(need);
-        let mut both = [0u32; 16];
+        let mut both = arena(r.scratch_bytes.max(16 * size_of::<CorayHit>()));
         let st = coray_kdtree_cast_image(
-            t.as_ptr().cast(),
-            bytes,
-            &s,
+            &t,
             &cam,
             &p,
-            sc.as_mut_ptr().cast(),
-            need,
             both.as_mut_ptr().cast(),
-            both.as_mut_ptr(),
+            r.scratch_bytes,
+            stack.as_mut_ptr().cast(),
+            CORAY_KDTREE_STACK_BYTES,
+            both.as_mut_ptr().cast(),
             core::ptr::null_mut(),
         );
         assert_eq!(st, CorayStatus::InvalidParameter);
@@ -250,17 +300,20 @@ fn cast_scratch_inside_the_tree_is_rejected() {
 fn patch_sample_count_does_not_wrap() {
     let f = floor();
     let s = scene(&f);
-    let (t, bytes) = kd(&s);
+    let (_a, t) = kd(&s);
+    let mut stack = arena(CORAY_KDTREE_STACK_BYTES);
     let a = [-1.0f32, 1.0, -1.0, 1.0, 1.0, -1.0, 1.0, 1.0, 1.0];
     let b = [-1.0f32, 4.0, -1.0, 1.0, 4.0, -1.0, 1.0, 4.0, 1.0];
-    let need = coray_patch_requirements(16);
-    let mut sc = arena(need);
-    let mut out = CorayPatchResult::default();
-    let st = unsafe {
-        coray_kdtree_patch_visibility(
-            t.as_ptr().cast(),
-            bytes,
-            &s,
+    let mut r = requirements();
+    let mut out = CorayPatchResult {
+        struct_size: size_of::<CorayPatchResult>(),
+        ..Default::default()
+    };
+    unsafe {
+        assert_eq!(coray_kdtree_patch_requirements(16, &mut r), CorayStatus::Ok);
+        let mut sc = arena(r.scratch_bytes);
+        let st = coray_kdtree_patch_visibility(
+            &t,
             a.as_ptr(),
             3,
             b.as_ptr(),
@@ -268,9 +321,112 @@ fn patch_sample_count_does_not_wrap() {
             256,
             1e-3,
             sc.as_mut_ptr().cast(),
-            need,
+            r.scratch_bytes,
+            stack.as_mut_ptr().cast(),
+            CORAY_KDTREE_STACK_BYTES,
             &mut out,
-        )
+            core::ptr::null_mut(),
+        );
+        assert_eq!(st, CorayStatus::InvalidParameter, "samples {}", out.samples);
+    }
+}
+
+/// Two builds into arenas full of different garbage give the same bytes,
+/// for every family: nothing of the caller's memory is left in an arena.
+#[test]
+fn built_arenas_are_a_function_of_scene_and_parameters() {
+    let f = floor();
+    let s = scene(&f);
+    let build = |fill: u8, family: u32| -> Vec<u8> {
+        let mut r = requirements();
+        unsafe {
+            let (bytes, scratch) = match family {
+                0 => {
+                    let p = coray_kdtree_params_default(CORAY_KD_PRESET_AUTO);
+                    assert_eq!(coray_kdtree_requirements(2, &p, &mut r), CorayStatus::Ok);
+                    (r.arena_bytes, r.scratch_bytes)
+                }
+                1 | 2 => {
+                    let b = if family == 1 {
+                        CORAY_BVH_BUILDER_TDBS
+                    } else {
+                        CORAY_BVH_BUILDER_RSTAR
+                    };
+                    let p = coray_bvh_params_default(b);
+                    assert_eq!(coray_bvh_requirements(2, &p, &mut r), CorayStatus::Ok);
+                    (r.arena_bytes, r.scratch_bytes)
+                }
+                _ => {
+                    let p = coray_proj_params_default(
+                        CORAY_PROJ_CRITERIA_2D,
+                        CORAY_BVH_BUILDER_NN_CHAIN,
+                    );
+                    assert_eq!(coray_proj_requirements(2, &p, &mut r), CorayStatus::Ok);
+                    (r.arena_bytes, r.scratch_bytes)
+                }
+            };
+            let mut a = arena(bytes);
+            let mut sc = arena(scratch);
+            for b in a.iter_mut().chain(sc.iter_mut()) {
+                b.0 = [fill; 16];
+            }
+            let (ap, sp) = (
+                a.as_mut_ptr().cast::<c_void>(),
+                sc.as_mut_ptr().cast::<c_void>(),
+            );
+            let null = core::ptr::null_mut();
+            let st = match family {
+                0 => coray_kdtree_build(
+                    &s,
+                    &coray_kdtree_params_default(0),
+                    ap,
+                    bytes,
+                    sp,
+                    scratch,
+                    null,
+                ),
+                1 => coray_bvh_build(
+                    &s,
+                    &coray_bvh_params_default(CORAY_BVH_BUILDER_TDBS),
+                    ap,
+                    bytes,
+                    sp,
+                    scratch,
+                    null,
+                ),
+                2 => coray_bvh_build(
+                    &s,
+                    &coray_bvh_params_default(CORAY_BVH_BUILDER_RSTAR),
+                    ap,
+                    bytes,
+                    sp,
+                    scratch,
+                    null,
+                ),
+                _ => {
+                    let mut cam_plane = CorayProjPlane {
+                        struct_size: size_of::<CorayProjPlane>(),
+                        ..Default::default()
+                    };
+                    assert_eq!(
+                        coray_proj_camera_plane(&camera(), &mut cam_plane),
+                        CorayStatus::Ok
+                    );
+                    let p = coray_proj_params_default(
+                        CORAY_PROJ_CRITERIA_2D,
+                        CORAY_BVH_BUILDER_NN_CHAIN,
+                    );
+                    coray_proj_build(&s, &p, &cam_plane, ap, bytes, sp, scratch, null)
+                }
+            };
+            assert_eq!(st, CorayStatus::Ok);
+            a.iter().flat_map(|b| b.0).collect()
+        }
     };
-    assert_eq!(st, CorayStatus::InvalidParameter, "samples {}", out.samples);
+    for family in 0..4 {
+        assert!(
+            build(0x00, family) == build(0xA5, family),
+            "family {family}"
+        );
+    }
 }

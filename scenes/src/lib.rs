@@ -1,9 +1,9 @@
 //! Scenes for coray: Eric Haines' Neutral File Format (NFF) read and
 //! written, and triangulated into the arrays a [`coray::Scene`] borrows.
-#![warn(missing_docs)]
 
 pub mod mesh;
 pub mod nff;
+pub mod random;
 pub mod spd;
 pub mod triangulate;
 

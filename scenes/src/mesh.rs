@@ -165,7 +165,10 @@ impl SceneMesh {
             let r = if bounds.is_empty() {
                 1.0
             } else {
-                (bounds.max - bounds.min).length().max(1e-6)
+                // Far enough from the centre to be a distinct f32 point.
+                (bounds.max - bounds.min)
+                    .length()
+                    .max(1e-5 * (1.0 + c.abs().max_element()))
             };
             View {
                 from: (c + Vec3::new(0.0, 0.3, 1.0).normalize() * (1.5 * r)).into(),
@@ -176,14 +179,7 @@ impl SceneMesh {
                 resolution: [512, 512],
             }
         });
-        m.camera = Camera {
-            from: view.from.into(),
-            at: view.at.into(),
-            up: view.up.into(),
-            angle_deg: view.angle,
-            width: view.resolution[0],
-            height: view.resolution[1],
-        };
+        m.camera = view.camera();
         m.hither = view.hither;
         m
     }

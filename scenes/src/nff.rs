@@ -21,6 +21,20 @@ pub struct View {
     pub resolution: [u32; 2],
 }
 
+impl View {
+    /// The camera this view describes.
+    pub fn camera(&self) -> coray::Camera {
+        coray::Camera {
+            from: self.from.into(),
+            at: self.at.into(),
+            up: self.up.into(),
+            angle_deg: self.angle,
+            width: self.resolution[0],
+            height: self.resolution[1],
+        }
+    }
+}
+
 /// A positional light (`l`), with an optional colour.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Light {
@@ -148,14 +162,16 @@ impl<'a> Lexer<'a> {
                 Some(i) => &line[..i],
                 None => line,
             };
+            // (byte offset, column) of the token being read; columns are
+            // counted once per character, so a line costs its length.
             let mut start = None;
-            for (bi, ch) in code
+            for (ci, (bi, ch)) in code
                 .char_indices()
                 .chain(std::iter::once((code.len(), ' ')))
+                .enumerate()
             {
                 if ch.is_whitespace() {
-                    if let Some(s) = start.take() {
-                        let col = code[..s].chars().count() + 1;
+                    if let Some((s, col)) = start.take() {
                         toks.push(Tok {
                             text: &code[s..bi],
                             line: li + 1,
@@ -163,7 +179,7 @@ impl<'a> Lexer<'a> {
                         });
                     }
                 } else if start.is_none() {
-                    start = Some(bi);
+                    start = Some((bi, ci + 1));
                 }
             }
             last = (li + 1, line.chars().count() + 1);
@@ -234,6 +250,24 @@ impl<'a> Lexer<'a> {
         Ok([self.float(what)?, self.float(what)?, self.float(what)?])
     }
 
+    /// An image side: 1 to the core's limit, the same as every other
+    /// resolution the project takes.
+    fn side(&mut self, what: &str) -> Result<u32, NffError> {
+        let t = self.next(what)?;
+        let max = coray::limits::MAX_IMAGE_SIDE;
+        match t.text.parse::<u32>() {
+            Ok(v) if (1..=max).contains(&v) => Ok(v),
+            _ => {
+                let (line, col, found) = (t.line, t.col, t.text.to_string());
+                Err(NffError {
+                    line,
+                    col,
+                    msg: format!("expected {what} (1 to {max} pixels), found `{found}`"),
+                })
+            }
+        }
+    }
+
     fn count(&mut self, what: &str, max: u64) -> Result<usize, NffError> {
         let t = self.next(what)?;
         match t.text.parse::<u64>() {
@@ -277,18 +311,23 @@ impl NffScene {
                     lx.keyword("hither")?;
                     let hither = lx.float("the hither distance")?;
                     lx.keyword("resolution")?;
-                    let resolution = [
-                        lx.count("the x resolution", 1 << 16)? as u32,
-                        lx.count("the y resolution", 1 << 16)? as u32,
-                    ];
-                    s.view = Some(View {
+                    let resolution = [lx.side("the x resolution")?, lx.side("the y resolution")?];
+                    let view = View {
                         from,
                         at,
                         up,
                         angle,
                         hither,
                         resolution,
-                    });
+                    };
+                    if let Some(why) = view.camera().fault() {
+                        return Err(NffError {
+                            line,
+                            col,
+                            msg: format!("a view the camera cannot use: {why}"),
+                        });
+                    }
+                    s.view = Some(view);
                 }
                 "b" => s.background = Some(lx.vec3("a background colour component")?),
                 "l" => {
@@ -358,6 +397,20 @@ impl NffScene {
                         if let Some(ns) = normals.as_mut() {
                             ns.push(lx.vec3("a vertex normal component")?);
                         }
+                    }
+                    let work = n as u64 * crate::triangulate::reflex_count(&vertices) as u64;
+                    if work > crate::triangulate::MAX_CLIP_WORK {
+                        return Err(NffError {
+                            line,
+                            col,
+                            msg: format!(
+                                "a polygon of {n} vertices with {} concave corners: \
+                                 triangulating it takes vertices x concave corners = {work} \
+                                 steps, more than the limit {}",
+                                work / n as u64,
+                                crate::triangulate::MAX_CLIP_WORK
+                            ),
+                        });
                     }
                     s.objects.push(Object::Polygon {
                         vertices,

@@ -14,48 +14,99 @@ pub fn newell_normal(p: &[[f32; 3]]) -> [f64; 3] {
     n
 }
 
+/// The largest `n * r` (vertices times reflex corners) of a polygon the
+/// NFF reader accepts: ear clipping tests each candidate ear against the
+/// reflex corners only, so it takes about `n * r` steps (convex polygons:
+/// `n`). 2^30 is about a second; real files stay far below (the SPD
+/// gears' 144-gons: 144 * 72).
+pub const MAX_CLIP_WORK: u64 = 1 << 30;
+
+/// A polygon in the plane that drops its normal's largest axis, wound
+/// counter-clockwise; `None` when it has no area.
+fn planar(p: &[[f32; 3]]) -> Option<Vec<[f64; 2]>> {
+    let normal = newell_normal(p);
+    let ax = (0..3).max_by(|&a, &b| normal[a].abs().total_cmp(&normal[b].abs()))?;
+    if normal[ax] == 0.0 || !normal[ax].is_finite() {
+        return None;
+    }
+    let (u, v) = ((ax + 1) % 3, (ax + 2) % 3);
+    let flip = normal[ax] < 0.0;
+    Some(
+        p.iter()
+            .map(|x| {
+                let (a, b) = (x[u] as f64, x[v] as f64);
+                if flip {
+                    [b, a]
+                } else {
+                    [a, b]
+                }
+            })
+            .collect(),
+    )
+}
+
+fn cross(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
+    (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+}
+
+/// Reflex (concave, or straight) corners of a polygon: with its vertex
+/// count, what [`ear_clip`] will cost (see [`MAX_CLIP_WORK`]).
+pub fn reflex_count(p: &[[f32; 3]]) -> usize {
+    let n = p.len();
+    match planar(p) {
+        Some(q) if n > 3 => (0..n)
+            .filter(|&i| cross(q[(i + n - 1) % n], q[i], q[(i + 1) % n]) <= 0.0)
+            .count(),
+        _ => 0,
+    }
+}
+
 /// Triangles `[i, j, k]` (indices into `p`) covering the simple polygon
 /// `p`, always `p.len() - 2` of them, in the polygon's winding. Works in
 /// the plane that drops the normal's largest axis; a degenerate polygon
-/// (no area) gets a fan, whose zero-area triangles no ray hits.
+/// (no area) gets a fan, whose zero-area triangles no ray hits. Takes
+/// about `n * r` steps for `n` vertices of which `r` are reflex.
 pub fn ear_clip(p: &[[f32; 3]]) -> Vec<[u32; 3]> {
     let n = p.len();
     let mut out = Vec::with_capacity(n.saturating_sub(2));
     if n < 3 {
         return out;
     }
-    let normal = newell_normal(p);
-    let ax = (0..3)
-        .max_by(|&a, &b| normal[a].abs().total_cmp(&normal[b].abs()))
-        .unwrap();
-    if normal[ax] == 0.0 || n == 3 {
-        for i in 1..n - 1 {
-            out.push([0, i as u32, i as u32 + 1]);
-        }
-        return out;
-    }
-    // 2D coordinates, oriented so that the polygon winds counter-clockwise.
-    let (u, v) = ((ax + 1) % 3, (ax + 2) % 3);
-    let flip = normal[ax] < 0.0;
-    let q: Vec<[f64; 2]> = p
-        .iter()
-        .map(|x| {
-            let (a, b) = (x[u] as f64, x[v] as f64);
-            if flip {
-                [b, a]
-            } else {
-                [a, b]
+    let q = match planar(p) {
+        Some(q) if n > 3 => q,
+        _ => {
+            for i in 1..n - 1 {
+                out.push([0, i as u32, i as u32 + 1]);
             }
-        })
-        .collect();
-    let cross = |a: [f64; 2], b: [f64; 2], c: [f64; 2]| {
-        (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+            return out;
+        }
     };
     let mut prev: Vec<usize> = (0..n).map(|i| (i + n - 1) % n).collect();
     let mut next: Vec<usize> = (0..n).map(|i| (i + 1) % n).collect();
     let reflex =
         |i: usize, prev: &[usize], next: &[usize]| cross(q[prev[i]], q[i], q[next[i]]) <= 0.0;
-    let mut is_reflex: Vec<bool> = (0..n).map(|i| reflex(i, &prev, &next)).collect();
+    // The reflex corners as a set with O(1) insert and remove: the only
+    // vertices that can lie inside a convex corner's triangle.
+    const NONE: usize = usize::MAX;
+    let mut slot = vec![NONE; n];
+    let mut reflexes: Vec<usize> = Vec::new();
+    let set = |i: usize, on: bool, slot: &mut [usize], reflexes: &mut Vec<usize>| {
+        if on && slot[i] == NONE {
+            slot[i] = reflexes.len();
+            reflexes.push(i);
+        } else if !on && slot[i] != NONE {
+            let at = slot[i];
+            reflexes.swap_remove(at);
+            if let Some(&moved) = reflexes.get(at) {
+                slot[moved] = at;
+            }
+            slot[i] = NONE;
+        }
+    };
+    for i in 0..n {
+        let r = reflex(i, &prev, &next);
+        set(i, r, &mut slot, &mut reflexes);
+    }
     let inside = |x: [f64; 2], a: [f64; 2], b: [f64; 2], c: [f64; 2]| {
         cross(a, b, x) >= 0.0 && cross(b, c, x) >= 0.0 && cross(c, a, x) >= 0.0
     };
@@ -64,23 +115,15 @@ pub fn ear_clip(p: &[[f32; 3]]) -> Vec<[u32; 3]> {
     let mut misses = 0;
     while left > 3 {
         let (a, c) = (prev[i], next[i]);
-        let mut ear = !is_reflex[i];
-        if ear {
-            // Only reflex vertices can lie inside a convex corner's triangle.
-            let mut k = next[c];
-            while k != a {
-                if is_reflex[k]
+        let ear = slot[i] == NONE
+            && !reflexes.iter().any(|&k| {
+                k != a
+                    && k != c
                     && q[k] != q[a]
                     && q[k] != q[i]
                     && q[k] != q[c]
                     && inside(q[k], q[a], q[i], q[c])
-                {
-                    ear = false;
-                    break;
-                }
-                k = next[k];
-            }
-        }
+            });
         // After a full round without an ear (rounding in a nearly
         // degenerate polygon), clip anyway: the count stays n - 2.
         if ear || misses > left {
@@ -88,8 +131,10 @@ pub fn ear_clip(p: &[[f32; 3]]) -> Vec<[u32; 3]> {
             next[a] = c;
             prev[c] = a;
             left -= 1;
-            is_reflex[a] = reflex(a, &prev, &next);
-            is_reflex[c] = reflex(c, &prev, &next);
+            set(i, false, &mut slot, &mut reflexes);
+            let (ra, rc) = (reflex(a, &prev, &next), reflex(c, &prev, &next));
+            set(a, ra, &mut slot, &mut reflexes);
+            set(c, rc, &mut slot, &mut reflexes);
             misses = 0;
             i = c;
         } else {
@@ -160,5 +205,62 @@ mod tests {
             [3.0, 0.0, 0.0f32],
         ];
         assert_eq!(ear_clip(&line).len(), 2);
+        assert_eq!(reflex_count(&line), 0);
+    }
+
+    /// A convex polygon of 8,193 vertices (points of a parabola, exact
+    /// in f32): no reflex corner, so each ear is found at once; its
+    /// triangles cover its area. A 2^20-gon circle, whose f32 corners are
+    /// partly concave by rounding, is past the reader's bound instead.
+    #[test]
+    fn convex_polygon_has_no_reflex_work() {
+        let k = 1i64 << 12;
+        let p: Vec<[f32; 3]> = (-k..=k).map(|x| [x as f32, (x * x) as f32, 0.0]).collect();
+        assert_eq!(reflex_count(&p), 0);
+        let tris = ear_clip(&p);
+        assert_eq!(tris.len(), p.len() - 2);
+        let want = newell_normal(&p)[2];
+        assert!(
+            (area2(&p, &tris) - want).abs() < 1e-4 * want.abs(),
+            "{want}"
+        );
+        let n = 1 << 20;
+        let circle: Vec<[f32; 3]> = (0..n)
+            .map(|i| {
+                let a = i as f64 * std::f64::consts::TAU / n as f64;
+                [a.cos() as f32 * 100.0, a.sin() as f32 * 100.0, 0.0]
+            })
+            .collect();
+        assert!(n as u64 * reflex_count(&circle) as u64 > MAX_CLIP_WORK);
+    }
+
+    /// The star of the first test, and a comb with many reflex corners:
+    /// reflex corners are counted, and clipping keeps the area.
+    #[test]
+    fn reflex_corners_are_counted() {
+        let star: Vec<[f32; 3]> = (0..10)
+            .map(|i| {
+                let r = if i % 2 == 0 { 2.0 } else { 0.7 };
+                let a = i as f32 * std::f32::consts::PI / 5.0;
+                [r * a.cos(), r * a.sin(), 0.0]
+            })
+            .collect();
+        assert_eq!(reflex_count(&star), 5);
+        // A comb: teeth up from a base, clockwise order reversed by the
+        // normal's sign.
+        let teeth = 200;
+        let mut comb = vec![[0.0, 0.0, 0.0f32]];
+        for k in 0..teeth {
+            let x = k as f32 * 2.0;
+            comb.extend([[x, 1.0, 0.0], [x + 0.5, 3.0, 0.0], [x + 1.0, 1.0, 0.0]]);
+        }
+        comb.push([teeth as f32 * 2.0, 0.0, 0.0]);
+        let t = ear_clip(&comb);
+        assert_eq!(t.len(), comb.len() - 2);
+        assert!(reflex_count(&comb) >= teeth - 1);
+        assert!((area2(&comb, &t).abs() - newell_normal(&comb)[2].abs()).abs() < 1e-2);
+        assert!(t
+            .iter()
+            .all(|t| area2(&comb, &[*t]) * newell_normal(&comb)[2] >= 0.0));
     }
 }

@@ -134,6 +134,45 @@ fn errors_name_line_and_column() {
             12,
             "x resolution",
         ),
+        (
+            "v\nfrom 0 0 1\nat 0 0 0\nup 0 1 0\nangle 45\nhither 1\nresolution 0 0\n",
+            7,
+            12,
+            "1 to 32768 pixels",
+        ),
+        (
+            "v\nfrom 0 0 1\nat 0 0 0\nup 0 1 0\nangle 45\nhither 1\nresolution 64 40000\n",
+            7,
+            15,
+            "1 to 32768 pixels",
+        ),
+        (
+            "s 0 0 0 1\n v\nfrom 1 2 3\nat 1 2 3\nup 0 1 0\nangle 45\nhither 1\nresolution 8 8\n",
+            2,
+            2,
+            "eye (from) is the point it looks at",
+        ),
+        (
+            "v\nfrom 0 0 1\nat 0 0 0\nup 0 0 -2\nangle 45\nhither 1\nresolution 8 8\n",
+            1,
+            1,
+            "along the view",
+        ),
+        (
+            "v\nfrom 0 0 1\nat 0 0 0\nup 0 1 0\nangle 0\nhither 1\nresolution 8 8\n",
+            1,
+            1,
+            "angle",
+        ),
+        // Columns count characters, not bytes.
+        ("# é\nb é 1 1\n", 2, 3, "background"),
+        ("s 0 0 0 1 ééé qq\n", 1, 11, "unknown command `ééé`"),
+        (
+            "s 0 0 0 1\nééé s 0 0 0 1 qq\n",
+            2,
+            1,
+            "unknown command `ééé`",
+        ),
     ];
     for (src, line, col, text) in cases {
         let e = NffScene::parse(src).unwrap_err();
@@ -160,4 +199,32 @@ fn garbage_never_panics() {
             assert!(e.line >= 1 && e.col >= 1);
         }
     }
+}
+
+/// A concave polygon past the triangulation bound is refused with the
+/// numbers that decide it; a large convex one is read.
+#[test]
+fn polygon_work_is_bounded() {
+    let comb = |teeth: usize| {
+        let mut t = format!("p {}\n0 0 0\n", 3 * teeth + 2);
+        for k in 0..teeth {
+            let x = 2 * k;
+            t += &format!("{x} 1 0\n{}.5 3 0\n{} 1 0\n", x, x + 1);
+        }
+        t + &format!("{} 0 0\n", 2 * teeth)
+    };
+    assert!(NffScene::parse(&comb(100)).is_ok());
+    let e = NffScene::parse(&comb(40_000)).unwrap_err();
+    assert_eq!((e.line, e.col), (1, 1));
+    assert!(
+        e.msg.contains("concave corners") && e.msg.contains("1073741824"),
+        "{e}"
+    );
+    let mut convex = String::from("p 8193\n");
+    for x in -4096i64..=4096 {
+        convex += &format!("{x} {} 0\n", x * x);
+    }
+    let s = NffScene::parse(&convex).unwrap();
+    let m = coray_scenes::SceneMesh::from_nff(&s);
+    assert_eq!(m.triangles.len(), 8191);
 }

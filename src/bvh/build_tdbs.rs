@@ -107,7 +107,7 @@ pub(crate) fn build<'a>(
                     Builder::Tdbs => (al - ar).abs(),
                     _ => al * k as f64 + ar * (count - k) as f64,
                 };
-                if best.map_or(true, |b| c.partial_cmp(&b.0) == Some(Ordering::Less)) {
+                if best.is_none_or(|b| c.partial_cmp(&b.0) == Some(Ordering::Less)) {
                     best = Some((c, axis, k));
                 }
             }

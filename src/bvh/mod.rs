@@ -12,6 +12,7 @@
 mod build_nn;
 mod build_nn_chain;
 mod build_tdbs;
+pub mod layout;
 mod node;
 mod rtree;
 pub(crate) mod traverse;
@@ -25,7 +26,7 @@ pub use rtree::{
     rtree_requirements, validate_rtree, InsertOrder, RTree, RTreeParams, RTreeRequirements,
     RTreeState, Split, MAX_CHILDREN,
 };
-pub use traverse::{BvhStackItem, BvhStats, BOX_HIT_COST};
+pub use traverse::{BvhStackItem, BOX_HIT_COST};
 pub use validate::BvhTreeStats;
 
 use crate::geom::{Aabb, Scene};
@@ -151,27 +152,84 @@ pub struct BvhInfo {
     pub depth: u32,
     /// Most children a node may have (2, or the R-tree's M).
     pub max_children: u32,
+    /// [`crate::rng::ref_digest`] of the references in leaves, low and high words.
+    pub ref_digest: [u32; 2],
 }
 
-/// A built hierarchy over a scene, borrowing the caller's memory.
+impl BvhInfo {
+    /// The recorded reference digest.
+    pub fn ref_digest(&self) -> u64 {
+        self.ref_digest[0] as u64 | (self.ref_digest[1] as u64) << 32
+    }
+
+    pub(crate) fn set_ref_digest(&mut self, d: u64) {
+        self.ref_digest = [d as u32, (d >> 32) as u32];
+    }
+}
+
+/// A built hierarchy over a scene, borrowing the caller's memory. Made
+/// only by the builders, [`RTree::bvh`] and [`Bvh::from_parts`].
 #[derive(Clone, Copy)]
 pub struct Bvh<'a> {
-    /// The primitives.
-    pub scene: Scene<'a>,
+    pub(crate) scene: Scene<'a>,
     /// Nodes (the R-tree's may include free blocks).
-    pub nodes: &'a [BvhNode],
+    pub(crate) nodes: &'a [BvhNode],
     /// References from leaves to global primitive indices.
-    pub refs: &'a [u32],
-    /// Shape.
-    pub info: BvhInfo,
+    pub(crate) refs: &'a [u32],
+    pub(crate) info: BvhInfo,
 }
 
-impl Bvh<'_> {
+impl<'a> Bvh<'a> {
+    /// Reassembles a hierarchy from parts read back from memory, with O(1)
+    /// checks (root and counts within the slices, fan-out, depth below the
+    /// node count). Run [`Bvh::validate`] on parts from untrusted storage:
+    /// until it accepts them, traversal never panics or hangs on them, but
+    /// may stop early with [`crate::TraceStats::faults`] counted.
+    pub fn from_parts(
+        scene: Scene<'a>,
+        nodes: &'a [BvhNode],
+        refs: &'a [u32],
+        info: BvhInfo,
+    ) -> Result<Bvh<'a>, Error> {
+        let i = &info;
+        if i.root as usize >= nodes.len()
+            || i.node_count as usize > nodes.len()
+            || i.ref_count as usize > refs.len()
+            || !(2..=crate::limits::RTREE_MAX_CHILDREN).contains(&i.max_children)
+            || i.depth >= i.node_count.max(1)
+        {
+            return Err(Error::Corrupt { what: "counts" });
+        }
+        Ok(Bvh {
+            scene,
+            nodes,
+            refs,
+            info,
+        })
+    }
+
+    /// Shape, counts and digest: what an arena header records.
+    pub fn info(&self) -> &BvhInfo {
+        &self.info
+    }
+
+    /// The scene the hierarchy was built on.
+    pub fn scene(&self) -> &Scene<'a> {
+        &self.scene
+    }
+
+    /// The nodes and the references.
+    pub fn parts(&self) -> (&'a [BvhNode], &'a [u32]) {
+        (self.nodes, self.refs)
+    }
+
     /// Entries of the traversal stack that [`Bvh::intersect`] and
     /// [`Bvh::occluded`] need: a node's children are pushed together, so
     /// `depth * (max_children - 1) + 1`.
     pub fn stack_len(&self) -> usize {
-        self.info.depth as usize * (self.info.max_children.max(2) as usize - 1) + 1
+        (self.info.depth as usize)
+            .saturating_mul(self.info.max_children.max(2) as usize - 1)
+            .saturating_add(1)
     }
 }
 
@@ -185,18 +243,21 @@ pub(crate) fn binary<'a>(
     ref_count: usize,
     depth: u32,
 ) -> Bvh<'a> {
+    let mut info = BvhInfo {
+        root: 0,
+        node_count: node_count as u32,
+        leaf_count: node_count.div_ceil(2) as u32,
+        ref_count: ref_count as u32,
+        depth,
+        max_children: 2,
+        ref_digest: [0; 2],
+    };
+    info.set_ref_digest(crate::rng::ref_digest(refs[..ref_count].iter().copied()));
     Bvh {
         scene: *scene,
         nodes,
         refs,
-        info: BvhInfo {
-            root: 0,
-            node_count: node_count as u32,
-            leaf_count: node_count.div_ceil(2) as u32,
-            ref_count: ref_count as u32,
-            depth,
-            max_children: 2,
-        },
+        info,
     }
 }
 

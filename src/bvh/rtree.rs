@@ -14,7 +14,7 @@ use crate::geom::{Aabb, Scene};
 use crate::Error;
 
 /// Most entries a node may have (the R-tree's M).
-pub const MAX_CHILDREN: u32 = 32;
+pub const MAX_CHILDREN: u32 = crate::limits::RTREE_MAX_CHILDREN;
 /// Height limit: with at least 2 entries per node, 2^40 objects.
 const MAX_HEIGHT: usize = 40;
 const NONE: u32 = u32::MAX;
@@ -79,7 +79,8 @@ impl RTreeParams {
         }
     }
 
-    fn check(&self) -> Result<(), Error> {
+    /// Checks M and m: 4 <= M <= [`MAX_CHILDREN`], 2 <= m <= M / 2.
+    pub fn check(&self) -> Result<(), Error> {
         let (big, small) = (self.max_children, self.min_children);
         if !(4..=MAX_CHILDREN).contains(&big) {
             return Err(Error::InvalidParameter {
@@ -129,13 +130,17 @@ pub fn rtree_requirements(capacity: usize, params: &RTreeParams) -> RTreeRequire
 /// its count says, none twice; blocks in use and free blocks add up to the
 /// blocks handed out; `bvh.info` agrees with `state`. For memory a caller
 /// loaded: a tree that passes can be traced, and resumed and changed.
+/// `stack` as for [`Bvh::validate`]. Never panics; linear time.
 pub fn validate_rtree(
     bvh: &Bvh,
     params: &RTreeParams,
     state: &RTreeState,
+    stack: &mut [super::BvhStackItem],
 ) -> Result<super::BvhTreeStats, Error> {
     let corrupt = |what| Err(Error::Corrupt { what });
-    params.check()?;
+    if params.check().is_err() {
+        return corrupt("R-tree parameters");
+    }
     let big = params.max_children;
     let st = state;
     if bvh.info.max_children != big || bvh.info.root != 0 || st.height as usize > MAX_HEIGHT {
@@ -150,30 +155,30 @@ pub fn validate_rtree(
     // after exactly that many steps has no repeats.
     let mut b = st.free_nodes;
     for _ in 0..st.free_node_blocks {
-        if b == NONE || b == 0 || (b - 1) % big != 0 || (b - 1) / big >= st.node_blocks {
+        if b == NONE || b == 0 || !(b - 1).is_multiple_of(big) || (b - 1) / big >= st.node_blocks {
             return corrupt("free node list");
         }
-        b = bvh.nodes[b as usize].first;
+        b = bvh.nodes.get(b as usize).map_or(0, |n| n.first);
     }
     if b != NONE {
         return corrupt("free node list longer than its count");
     }
     let mut b = st.free_refs;
     for _ in 0..st.free_ref_blocks {
-        if b == NONE || b % big != 0 || b / big >= st.ref_blocks {
+        if b == NONE || !b.is_multiple_of(big) || b / big >= st.ref_blocks {
             return corrupt("free reference list");
         }
-        b = bvh.refs[b as usize];
+        b = bvh.refs.get(b as usize).copied().unwrap_or(0);
     }
     if b != NONE {
         return corrupt("free reference list longer than its count");
     }
-    let stats = bvh.validate(Some(params.min_children))?;
+    let stats = bvh.validate(Some(params.min_children), stack)?;
     // Every interior node owns one node block and every leaf one
     // reference block.
     let interior = stats.nodes - stats.leaves;
-    if interior + st.free_node_blocks != st.node_blocks
-        || stats.leaves + st.free_ref_blocks != st.ref_blocks
+    if interior.checked_add(st.free_node_blocks) != Some(st.node_blocks)
+        || stats.leaves.checked_add(st.free_ref_blocks) != Some(st.ref_blocks)
     {
         return corrupt("blocks in use and free blocks do not add up");
     }
@@ -221,6 +226,8 @@ pub struct RTreeState {
     pub free_ref_blocks: u32,
     /// Objects in the tree.
     pub len: u32,
+    /// [`crate::rng::ref_digest`] of the objects, low and high words.
+    pub ref_digest: [u32; 2],
 }
 
 /// One entry while a node is being split: a child node, or (at leaf
@@ -288,7 +295,7 @@ impl<'a> RTree<'a> {
             },
             source: None,
         };
-        let b = t.alloc_refs().expect("checked above");
+        let b = t.alloc_refs()?.ok_or(BROKEN)?;
         t.nodes[0] = BvhNode::leaf(&Aabb::EMPTY, b, 0);
         Ok(t)
     }
@@ -348,14 +355,9 @@ impl<'a> RTree<'a> {
         match params.order {
             InsertOrder::Scene => {}
             InsertOrder::Shuffled(seed) => {
-                let mut s = seed;
+                let mut rng = crate::rng::SplitMix64(seed);
                 for i in (1..n).rev() {
-                    s = s.wrapping_add(0x9E37_79B9_7F4A_7C15);
-                    let mut z = s;
-                    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-                    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-                    z ^= z >> 31;
-                    order.swap(i, (z % (i as u64 + 1)) as usize);
+                    order.swap(i, rng.below(i as u64 + 1) as usize);
                 }
             }
             InsertOrder::Sorted => {
@@ -375,6 +377,8 @@ impl<'a> RTree<'a> {
     /// Takes up a tree whose slices and [`RTree::state`] a caller kept
     /// (an arena from the C ABI). Checks, in O(1), that the state fits the
     /// slices; [`RTree::validate`] checks the rest on untrusted memory.
+    /// Insert and delete never panic on a tree that fails it: they stop at
+    /// the first broken invariant with [`Error::Corrupt`].
     pub fn resume(
         scene: &Scene<'a>,
         params: RTreeParams,
@@ -382,8 +386,10 @@ impl<'a> RTree<'a> {
         refs: &'a mut [u32],
         state: RTreeState,
     ) -> Result<RTree<'a>, Error> {
-        params.check()?;
         let corrupt = |what| Err(Error::Corrupt { what });
+        if params.check().is_err() {
+            return corrupt("R-tree parameters");
+        }
         let big = params.max_children as usize;
         let st = &state;
         if nodes.is_empty() || 1 + st.node_blocks as usize * big > nodes.len() {
@@ -413,9 +419,12 @@ impl<'a> RTree<'a> {
         self.state
     }
 
-    /// [`validate_rtree`] of this tree.
-    pub fn validate(&self) -> Result<super::BvhTreeStats, Error> {
-        validate_rtree(&self.bvh(), &self.params, &self.state)
+    /// [`validate_rtree`] of this tree, on a stack of [`Bvh::stack_len`].
+    pub fn validate(
+        &self,
+        stack: &mut [super::BvhStackItem],
+    ) -> Result<super::BvhTreeStats, Error> {
+        validate_rtree(&self.bvh(), &self.params, &self.state, stack)
     }
 
     /// The box a primitive enters with, or `None` when it stays out.
@@ -446,10 +455,14 @@ impl<'a> RTree<'a> {
             info: BvhInfo {
                 root: 0,
                 node_count: self.live_nodes(),
-                leaf_count: self.state.ref_blocks - self.state.free_ref_blocks,
+                leaf_count: self
+                    .state
+                    .ref_blocks
+                    .saturating_sub(self.state.free_ref_blocks),
                 ref_count: self.state.len,
                 depth: self.state.height,
                 max_children: big,
+                ref_digest: self.state.ref_digest,
             },
         }
     }
@@ -463,85 +476,145 @@ impl<'a> RTree<'a> {
     /// leaf one reference block, so this is O(1).
     fn live_nodes(&self) -> u32 {
         let st = &self.state;
-        (st.node_blocks - st.free_node_blocks) + (st.ref_blocks - st.free_ref_blocks)
+        (st.node_blocks.saturating_sub(st.free_node_blocks))
+            .saturating_add(st.ref_blocks.saturating_sub(st.free_ref_blocks))
     }
 
-    fn alloc_nodes(&mut self) -> Option<u32> {
+    /// Node slot `slot`, or [`BROKEN`] outside the slice.
+    #[inline]
+    fn node(&self, slot: u32) -> Result<BvhNode, Error> {
+        self.nodes.get(slot as usize).copied().ok_or(BROKEN)
+    }
+
+    #[inline]
+    fn node_mut(&mut self, slot: u32) -> Result<&mut BvhNode, Error> {
+        self.nodes.get_mut(slot as usize).ok_or(BROKEN)
+    }
+
+    #[inline]
+    fn reference(&self, i: u32) -> Result<u32, Error> {
+        self.refs.get(i as usize).copied().ok_or(BROKEN)
+    }
+
+    #[inline]
+    fn reference_mut(&mut self, i: u32) -> Result<&mut u32, Error> {
+        self.refs.get_mut(i as usize).ok_or(BROKEN)
+    }
+
+    /// Entries of `nd`, checked against M: a node never holds more.
+    #[inline]
+    fn entries(&self, nd: &BvhNode) -> Result<u32, Error> {
+        let n = nd.len();
+        if n > self.params.max_children {
+            return Err(BROKEN);
+        }
+        Ok(n)
+    }
+
+    /// Adds or removes object `p` from the digest.
+    fn digest(&mut self, p: u32, add: bool) {
+        let d = self.state.ref_digest[0] as u64 | (self.state.ref_digest[1] as u64) << 32;
+        let m = crate::rng::ref_mix(p);
+        let d = if add {
+            d.wrapping_add(m)
+        } else {
+            d.wrapping_sub(m)
+        };
+        self.state.ref_digest = [d as u32, (d >> 32) as u32];
+    }
+
+    /// A node block: from the free list, else fresh; `None` when full.
+    fn alloc_nodes(&mut self) -> Result<Option<u32>, Error> {
         let big = self.params.max_children as usize;
         if self.state.free_nodes != NONE {
             let b = self.state.free_nodes;
-            self.state.free_nodes = self.nodes[b as usize].first;
-            self.state.free_node_blocks -= 1;
-            return Some(b);
+            let next = self.node(b)?.first;
+            self.state.free_nodes = next;
+            self.state.free_node_blocks =
+                self.state.free_node_blocks.checked_sub(1).ok_or(BROKEN)?;
+            return Ok(Some(b));
         }
         let start = 1 + self.state.node_blocks as usize * big;
         if start + big > self.nodes.len() {
-            return None;
+            return Ok(None);
         }
         self.state.node_blocks += 1;
-        Some(start as u32)
+        Ok(Some(start as u32))
     }
 
-    fn alloc_refs(&mut self) -> Option<u32> {
+    /// A reference block, as [`RTree::alloc_nodes`].
+    fn alloc_refs(&mut self) -> Result<Option<u32>, Error> {
         let big = self.params.max_children as usize;
         if self.state.free_refs != NONE {
             let b = self.state.free_refs;
-            self.state.free_refs = self.refs[b as usize];
-            self.state.free_ref_blocks -= 1;
-            return Some(b);
+            let next = self.reference(b)?;
+            self.state.free_refs = next;
+            self.state.free_ref_blocks = self.state.free_ref_blocks.checked_sub(1).ok_or(BROKEN)?;
+            return Ok(Some(b));
         }
         let start = self.state.ref_blocks as usize * big;
         if start + big > self.refs.len() {
-            return None;
+            return Ok(None);
         }
         self.state.ref_blocks += 1;
-        Some(start as u32)
+        Ok(Some(start as u32))
     }
 
-    fn free_block(&mut self, leaf: bool, b: u32) {
+    fn free_block(&mut self, leaf: bool, b: u32) -> Result<(), Error> {
         if leaf {
-            self.refs[b as usize] = self.state.free_refs;
+            let head = self.state.free_refs;
+            *self.reference_mut(b)? = head;
             self.state.free_refs = b;
             self.state.free_ref_blocks += 1;
         } else {
-            self.nodes[b as usize].first = self.state.free_nodes;
+            let head = self.state.free_nodes;
+            self.node_mut(b)?.first = head;
             self.state.free_nodes = b;
             self.state.free_node_blocks += 1;
         }
+        Ok(())
     }
 
     /// Blocks still obtainable: free lists plus untouched room.
     fn room(&self) -> (usize, usize) {
         let big = self.params.max_children as usize;
-        let nodes = self.state.free_node_blocks as usize + (self.nodes.len() - 1) / big
-            - self.state.node_blocks as usize;
-        let refs = self.state.free_ref_blocks as usize + self.refs.len() / big
-            - self.state.ref_blocks as usize;
+        let nodes = (self.state.free_node_blocks as usize + (self.nodes.len() - 1) / big)
+            .saturating_sub(self.state.node_blocks as usize);
+        let refs = (self.state.free_ref_blocks as usize + self.refs.len() / big)
+            .saturating_sub(self.state.ref_blocks as usize);
         (nodes, refs)
     }
 
-    fn entry_box(&self, leaf: bool, block: u32, i: u32) -> Aabb {
-        if leaf {
-            let p = self.refs[(block + i) as usize] as usize;
+    fn entry_box(&self, leaf: bool, block: u32, i: u32) -> Result<Aabb, Error> {
+        let at = block.checked_add(i).ok_or(BROKEN)?;
+        Ok(if leaf {
+            let p = self.reference(at)? as usize;
             self.prim_box(p).unwrap_or(Aabb::EMPTY)
         } else {
-            self.nodes[(block + i) as usize].bounds()
-        }
+            self.node(at)?.bounds()
+        })
     }
 
     /// Recomputes the box of the node in `slot` from its entries.
-    fn refit(&mut self, slot: u32) {
-        let nd = self.nodes[slot as usize];
+    fn refit(&mut self, slot: u32) -> Result<(), Error> {
+        let nd = self.node(slot)?;
         let mut b = Aabb::EMPTY;
-        for i in 0..nd.len() {
-            b = b.union(&self.entry_box(nd.is_leaf(), nd.first, i));
+        for i in 0..self.entries(&nd)? {
+            b = b.union(&self.entry_box(nd.is_leaf(), nd.first, i)?);
         }
-        self.nodes[slot as usize].set_bounds(&b);
+        self.node_mut(slot)?.set_bounds(&b);
+        Ok(())
     }
 
     /// The entry of interior node `nd` that `add` should go into.
-    fn choose_subtree(&self, nd: &BvhNode, add: &Aabb) -> u32 {
-        let kids = &self.nodes[nd.first as usize..(nd.first + nd.len()) as usize];
+    fn choose_subtree(&self, nd: &BvhNode, add: &Aabb) -> Result<u32, Error> {
+        let n = self.entries(nd)?;
+        let kids = self
+            .nodes
+            .get(nd.first as usize..)
+            .and_then(|k| k.get(..n as usize))
+            .filter(|k| !k.is_empty())
+            .ok_or(BROKEN)?;
         let above_leaves = kids[0].is_leaf();
         let mut best = (0u32, f32::INFINITY, f32::INFINITY, f32::INFINITY);
         for (i, k) in kids.iter().enumerate() {
@@ -565,7 +638,7 @@ impl<'a> RTree<'a> {
                 best = (i as u32, key.0, key.1, key.2);
             }
         }
-        best.0
+        Ok(best.0)
     }
 
     /// Inserts primitive `prim`. A degenerate primitive is not stored (it
@@ -579,17 +652,18 @@ impl<'a> RTree<'a> {
             return Ok(());
         };
         if self.params.forced_reinsert && self.room_for_reinsertion() {
-            self.insert_reinserting(BvhNode::leaf(&pb, prim, 1));
-            self.state.len += 1;
+            self.insert_reinserting(BvhNode::leaf(&pb, prim, 1))?;
+            self.state.len = self.state.len.checked_add(1).ok_or(BROKEN)?;
+            self.digest(prim, true);
             return Ok(());
         }
         let big = self.params.max_children;
         // Path from the root to the leaf, as slots.
         let mut path = [0u32; MAX_HEIGHT + 1];
-        let depth = self.path_to(&pb, 0, &mut path);
+        let depth = self.path_to(&pb, 0, &mut path)?;
         // Splits needed: full nodes from the leaf up; one more block when the root splits.
         let mut splits = 0;
-        while splits <= depth && self.nodes[path[depth - splits] as usize].len() == big {
+        while splits <= depth && self.node(path[depth - splits])?.len() == big {
             splits += 1;
         }
         let (node_room, ref_room) = self.room();
@@ -611,8 +685,9 @@ impl<'a> RTree<'a> {
         // Every level counts as reinserted already: overflow splits.
         let mut out = [BvhNode::default(); MAX_CHILDREN as usize];
         let entry = BvhNode::leaf(&pb, prim, 1);
-        self.place_on_path(entry, &path, depth, &mut [true; MAX_HEIGHT + 1], &mut out);
-        self.state.len += 1;
+        self.place_on_path(entry, &path, depth, &mut [true; MAX_HEIGHT + 1], &mut out)?;
+        self.state.len = self.state.len.checked_add(1).ok_or(BROKEN)?;
+        self.digest(prim, true);
         Ok(())
     }
 
@@ -638,7 +713,7 @@ impl<'a> RTree<'a> {
 
     /// Inserts `first` (an object entry) with forced reinsertion; entries
     /// taken out wait on a stack with the height of the node they go in.
-    fn insert_reinserting(&mut self, first: Entry) {
+    fn insert_reinserting(&mut self, first: Entry) -> Result<(), Error> {
         // Each level but the root reinserts once, at most 30% of 32 entries.
         const MAX_PENDING: usize = 1 + 9 * MAX_HEIGHT;
         let mut pending = [(BvhNode::default(), 0u32); MAX_PENDING];
@@ -649,29 +724,41 @@ impl<'a> RTree<'a> {
             sp -= 1;
             let (entry, height) = pending[sp];
             let mut out = [BvhNode::default(); MAX_CHILDREN as usize];
-            let (n, at) = self.place(entry, height, &mut reinserted, &mut out);
+            let (n, at) = self.place(entry, height, &mut reinserted, &mut out)?;
             // Farthest first onto the stack: the nearest is placed first.
             for e in &out[..n] {
-                pending[sp] = (*e, at);
+                *pending.get_mut(sp).ok_or(BROKEN)? = (*e, at);
                 sp += 1;
             }
         }
+        Ok(())
     }
 
     /// The slots from the root down to the node `height` levels above the
     /// leaves that an entry with box `b` goes into; returns its depth.
-    fn path_to(&self, b: &Aabb, height: u32, path: &mut [u32; MAX_HEIGHT + 1]) -> usize {
+    fn path_to(
+        &self,
+        b: &Aabb,
+        height: u32,
+        path: &mut [u32; MAX_HEIGHT + 1],
+    ) -> Result<usize, Error> {
         let top = self.state.height;
         let mut depth = 0usize;
         let mut slot = 0u32;
-        while top - depth as u32 > height {
-            let nd = self.nodes[slot as usize];
+        while top.checked_sub(depth as u32).ok_or(BROKEN)? > height {
+            let nd = self.node(slot)?;
+            if nd.is_leaf() || depth >= MAX_HEIGHT {
+                return Err(BROKEN);
+            }
             path[depth] = slot;
             depth += 1;
-            slot = nd.first + self.choose_subtree(&nd, b);
+            slot = nd
+                .first
+                .checked_add(self.choose_subtree(&nd, b)?)
+                .ok_or(BROKEN)?;
         }
         path[depth] = slot;
-        depth
+        Ok(depth)
     }
 
     /// Puts `entry` into a node `height` levels above the leaves (0: a
@@ -682,9 +769,9 @@ impl<'a> RTree<'a> {
         height: u32,
         reinserted: &mut [bool; MAX_HEIGHT + 1],
         out: &mut [Entry; MAX_CHILDREN as usize],
-    ) -> (usize, u32) {
+    ) -> Result<(usize, u32), Error> {
         let mut path = [0u32; MAX_HEIGHT + 1];
-        let depth = self.path_to(&entry.bounds(), height, &mut path);
+        let depth = self.path_to(&entry.bounds(), height, &mut path)?;
         self.place_on_path(entry, &path, depth, reinserted, out)
     }
 
@@ -699,7 +786,7 @@ impl<'a> RTree<'a> {
         depth: usize,
         reinserted: &mut [bool; MAX_HEIGHT + 1],
         out: &mut [Entry; MAX_CHILDREN as usize],
-    ) -> (usize, u32) {
+    ) -> Result<(usize, u32), Error> {
         let big = self.params.max_children;
         let top = self.state.height;
         let mut entry = entry;
@@ -707,26 +794,27 @@ impl<'a> RTree<'a> {
         let mut taken = (0usize, 0u32);
         loop {
             let s = path[level];
-            let nd = self.nodes[s as usize];
-            if nd.len() < big {
-                self.put(nd.is_leaf(), nd.first + nd.len(), &entry);
-                self.nodes[s as usize].set_len(nd.len() + 1);
-                self.refit(s);
+            let nd = self.node(s)?;
+            let n = self.entries(&nd)?;
+            if n < big {
+                self.put(nd.is_leaf(), nd.first.checked_add(n).ok_or(BROKEN)?, &entry)?;
+                self.node_mut(s)?.set_len(n + 1);
+                self.refit(s)?;
                 break;
             }
-            let h = (top as usize - level) as u32;
+            let h = (top as usize).checked_sub(level).ok_or(BROKEN)? as u32;
             if level > 0 && !reinserted[h as usize] {
                 reinserted[h as usize] = true;
-                taken = (self.take_farthest(s, &entry, out), h);
+                taken = (self.take_farthest(s, &entry, out)?, h);
                 break;
             }
-            let sibling = self.split(s, &entry);
+            let sibling = self.split(s, &entry)?;
             if level == 0 {
                 // The root split: a new root over the old one and its sibling.
-                let b = self.alloc_nodes().expect("room checked");
-                let old = self.nodes[0];
-                self.nodes[b as usize] = old;
-                self.nodes[b as usize + 1] = sibling;
+                let b = self.alloc_nodes()?.ok_or(BROKEN)?;
+                let old = self.node(0)?;
+                *self.node_mut(b)? = old;
+                *self.node_mut(b.wrapping_add(1))? = sibling;
                 let joint = old.bounds().union(&sibling.bounds());
                 self.nodes[0] = BvhNode::interior(&joint, b, 2);
                 self.state.height += 1;
@@ -736,18 +824,23 @@ impl<'a> RTree<'a> {
             level -= 1;
         }
         for l in (0..level).rev() {
-            self.refit(path[l]);
+            self.refit(path[l])?;
         }
-        taken
+        Ok(taken)
     }
 
     /// The full node in `slot` plus `extra`: keeps the entries nearest the
     /// centre of their joint box, writes the [`RTree::reinsert_count`]
     /// farthest to `out` (farthest first) and returns how many.
-    fn take_farthest(&mut self, slot: u32, extra: &Entry, out: &mut [Entry]) -> usize {
-        let nd = self.nodes[slot as usize];
+    fn take_farthest(
+        &mut self,
+        slot: u32,
+        extra: &Entry,
+        out: &mut [Entry],
+    ) -> Result<usize, Error> {
+        let nd = self.node(slot)?;
         let leaf = nd.is_leaf();
-        let (mut e, n) = self.overfull(slot, extra);
+        let (mut e, n) = self.overfull(slot, extra)?;
         let all = e[..n].iter().fold(Aabb::EMPTY, |b, x| b.union(&x.bounds()));
         let c = 0.5 * (all.min + all.max);
         let dist = |x: &Entry| {
@@ -761,68 +854,77 @@ impl<'a> RTree<'a> {
                 .then(a.first.cmp(&b.first))
                 .then(a.count.cmp(&b.count))
         });
-        let k = self.reinsert_count();
+        let k = self.reinsert_count().min(n);
         out[..k].copy_from_slice(&e[..k]);
         for (i, x) in e[k..n].iter().enumerate() {
-            self.put(leaf, nd.first + i as u32, x);
+            self.put(leaf, nd.first.wrapping_add(i as u32), x)?;
         }
-        self.nodes[slot as usize].set_len((n - k) as u32);
-        self.refit(slot);
-        k
+        self.node_mut(slot)?.set_len((n - k) as u32);
+        self.refit(slot)?;
+        Ok(k)
     }
 
     /// The entries of the full node in `slot`, then `extra`, and how many.
-    fn overfull(&self, slot: u32, extra: &Entry) -> ([Entry; MAX_CHILDREN as usize + 1], usize) {
-        let nd = self.nodes[slot as usize];
-        let n = nd.len() as usize + 1;
+    fn overfull(
+        &self,
+        slot: u32,
+        extra: &Entry,
+    ) -> Result<([Entry; MAX_CHILDREN as usize + 1], usize), Error> {
+        let nd = self.node(slot)?;
+        let n = self.entries(&nd)? as usize + 1;
         let mut e = [BvhNode::default(); MAX_CHILDREN as usize + 1];
         for (i, x) in e.iter_mut().enumerate().take(n - 1) {
+            let at = nd.first.checked_add(i as u32).ok_or(BROKEN)?;
             *x = if nd.is_leaf() {
-                let p = self.refs[(nd.first + i as u32) as usize];
-                BvhNode::leaf(&self.entry_box(true, nd.first, i as u32), p, 1)
+                let p = self.reference(at)?;
+                BvhNode::leaf(&self.entry_box(true, nd.first, i as u32)?, p, 1)
             } else {
-                self.nodes[(nd.first + i as u32) as usize]
+                self.node(at)?
             };
         }
         e[n - 1] = *extra;
-        (e, n)
+        Ok((e, n))
     }
 
-    fn put(&mut self, leaf: bool, at: u32, e: &Entry) {
+    fn put(&mut self, leaf: bool, at: u32, e: &Entry) -> Result<(), Error> {
         if leaf {
-            self.refs[at as usize] = e.first;
+            *self.reference_mut(at)? = e.first;
         } else {
-            self.nodes[at as usize] = *e;
+            *self.node_mut(at)? = *e;
         }
+        Ok(())
     }
 
     /// Splits the full node in `slot` plus `extra` into two groups: the
     /// first stays in the node's block, the second goes to a new block,
     /// returned as the node's new sibling.
-    fn split(&mut self, slot: u32, extra: &Entry) -> Entry {
-        let nd = self.nodes[slot as usize];
+    fn split(&mut self, slot: u32, extra: &Entry) -> Result<Entry, Error> {
+        let nd = self.node(slot)?;
         let leaf = nd.is_leaf();
-        let (mut e, n) = self.overfull(slot, extra);
+        let (mut e, n) = self.overfull(slot, extra)?;
         let m = self.params.min_children as usize;
+        if n < 2 * m {
+            return Err(BROKEN);
+        }
         let second = match self.params.split {
             Split::Quadratic => quadratic_split(&e[..n], m),
             Split::RStar => rstar_split(&mut e[..n], m),
         };
         let block = if leaf {
-            self.alloc_refs()
+            self.alloc_refs()?
         } else {
-            self.alloc_nodes()
+            self.alloc_nodes()?
         }
-        .expect("room checked before the insert");
+        .ok_or(BROKEN)?;
         let (mut k1, mut k2) = (0u32, 0u32);
         let (mut b1, mut b2) = (Aabb::EMPTY, Aabb::EMPTY);
         for (i, x) in e[..n].iter().enumerate() {
             if second[i] {
-                self.put(leaf, block + k2, x);
+                self.put(leaf, block.wrapping_add(k2), x)?;
                 k2 += 1;
                 b2 = b2.union(&x.bounds());
             } else {
-                self.put(leaf, nd.first + k1, x);
+                self.put(leaf, nd.first.wrapping_add(k1), x)?;
                 k1 += 1;
                 b1 = b1.union(&x.bounds());
             }
@@ -834,8 +936,8 @@ impl<'a> RTree<'a> {
                 BvhNode::interior(b, first, k)
             }
         };
-        self.nodes[slot as usize] = kind(&b1, nd.first, k1);
-        kind(&b2, block, k2)
+        *self.node_mut(slot)? = kind(&b1, nd.first, k1);
+        Ok(kind(&b2, block, k2))
     }
 
     /// Removes primitive `prim`; false when the tree does not hold it.
@@ -861,19 +963,32 @@ impl<'a> RTree<'a> {
         // Depth-first search for the leaf holding it: (slot, next entry).
         let mut path = [(0u32, 0u32); MAX_HEIGHT + 1];
         let mut depth = 0usize;
+        // A search visits each node once: more visits means a broken tree.
+        let mut budget = self.nodes.len();
         let found = loop {
+            budget = budget.checked_sub(1).ok_or(BROKEN)?;
             let (slot, next) = path[depth];
-            let nd = self.nodes[slot as usize];
+            let nd = self.node(slot)?;
+            let n = self.entries(&nd)?;
             if nd.is_leaf() {
-                let hit = (0..nd.len()).find(|&i| self.refs[(nd.first + i) as usize] == prim);
+                let mut hit = None;
+                for i in 0..n {
+                    if self.reference(nd.first.wrapping_add(i))? == prim {
+                        hit = Some(i);
+                        break;
+                    }
+                }
                 if let Some(i) = hit {
                     break Some(i);
                 }
-            } else if next < nd.len() {
+            } else if next < n {
                 path[depth].1 += 1;
-                let child = nd.first + next;
-                let cb = self.nodes[child as usize].bounds();
+                let child = nd.first.wrapping_add(next);
+                let cb = self.node(child)?.bounds();
                 if cb.union(&pb) == cb {
+                    if depth == MAX_HEIGHT {
+                        return Err(BROKEN);
+                    }
                     depth += 1;
                     path[depth] = (child, 0);
                 }
@@ -886,43 +1001,55 @@ impl<'a> RTree<'a> {
         };
         let Some(i) = found else { return Ok(false) };
         let leaf = path[depth].0;
-        let nd = self.nodes[leaf as usize];
-        self.refs[(nd.first + i) as usize] = self.refs[(nd.first + nd.len() - 1) as usize];
-        self.nodes[leaf as usize].set_len(nd.len() - 1);
-        self.state.len -= 1;
+        let nd = self.node(leaf)?;
+        let last = self.reference(nd.first.wrapping_add(nd.len() - 1))?;
+        *self.reference_mut(nd.first.wrapping_add(i))? = last;
+        self.node_mut(leaf)?.set_len(nd.len() - 1);
+        self.state.len = self.state.len.checked_sub(1).ok_or(BROKEN)?;
+        self.digest(prim, false);
         // CondenseTree: dissolve underfull nodes on the path, bottom up.
         let mut orphan_count = 0usize;
         for l in (1..=depth).rev() {
             let s = path[l].0;
-            if self.nodes[s as usize].len() >= self.params.min_children {
-                self.refit(s);
+            if self.node(s)?.len() >= self.params.min_children {
+                self.refit(s)?;
                 continue;
             }
-            self.dissolve(s, orphans, &mut orphan_count);
+            self.dissolve(s, orphans, &mut orphan_count)?;
             let parent = path[l - 1].0;
-            let pn = self.nodes[parent as usize];
-            let last = pn.first + pn.len() - 1;
-            self.nodes[s as usize] = self.nodes[last as usize];
-            self.nodes[parent as usize].set_len(pn.len() - 1);
+            let pn = self.node(parent)?;
+            let last = pn
+                .first
+                .checked_add(pn.len())
+                .and_then(|e| e.checked_sub(1))
+                .ok_or(BROKEN)?;
+            let moved = self.node(last)?;
+            *self.node_mut(s)? = moved;
+            self.node_mut(parent)?.set_len(pn.len() - 1);
         }
-        self.refit(0);
+        self.refit(0)?;
         // Shorten: a root with one child is replaced by it.
         while !self.nodes[0].is_leaf() && self.nodes[0].len() <= 1 {
             let root = self.nodes[0];
             if root.is_empty() {
-                self.free_block(false, root.first);
-                let b = self
-                    .alloc_refs()
-                    .expect("the dissolved leaves freed their blocks");
+                self.free_block(false, root.first)?;
+                let b = self.alloc_refs()?.ok_or(BROKEN)?;
                 self.nodes[0] = BvhNode::leaf(&Aabb::EMPTY, b, 0);
                 self.state.height = 0;
                 break;
             }
-            self.nodes[0] = self.nodes[root.first as usize];
-            self.free_block(false, root.first);
-            self.state.height -= 1;
+            self.nodes[0] = self.node(root.first)?;
+            self.free_block(false, root.first)?;
+            self.state.height = self.state.height.checked_sub(1).ok_or(BROKEN)?;
         }
-        self.state.len -= orphan_count as u32;
+        self.state.len = self
+            .state
+            .len
+            .checked_sub(orphan_count as u32)
+            .ok_or(BROKEN)?;
+        for &p in &orphans[..orphan_count] {
+            self.digest(p, false);
+        }
         for &p in &orphans[..orphan_count] {
             self.insert(p)?;
         }
@@ -930,41 +1057,53 @@ impl<'a> RTree<'a> {
     }
 
     /// Frees the subtree in `slot`, collecting its objects into `orphans`.
-    fn dissolve(&mut self, slot: u32, orphans: &mut [u32], n: &mut usize) {
-        let nd = self.nodes[slot as usize];
+    fn dissolve(&mut self, slot: u32, orphans: &mut [u32], n: &mut usize) -> Result<(), Error> {
+        let nd = self.node(slot)?;
+        let mut take = |orphans: &mut [u32], p: u32| -> Result<(), Error> {
+            *orphans.get_mut(*n).ok_or(BROKEN)? = p;
+            *n += 1;
+            Ok(())
+        };
         if nd.is_leaf() {
-            for i in 0..nd.len() {
-                orphans[*n] = self.refs[(nd.first + i) as usize];
-                *n += 1;
+            for i in 0..self.entries(&nd)? {
+                take(orphans, self.reference(nd.first.wrapping_add(i))?)?;
             }
-            self.free_block(true, nd.first);
-            return;
+            return self.free_block(true, nd.first);
         }
         // Depth-first over the subtree's blocks: a block is freed only
         // after its entries are read (freeing overwrites its first slot).
         let mut stack = [(0u32, 0u32); MAX_HEIGHT * MAX_CHILDREN as usize];
-        stack[0] = (nd.first, nd.len());
+        stack[0] = (nd.first, self.entries(&nd)?);
         let mut sp = 1;
+        let mut budget = self.nodes.len();
         while sp > 0 {
+            budget = budget.checked_sub(1).ok_or(BROKEN)?;
             sp -= 1;
             let (block, len) = stack[sp];
             for i in 0..len {
-                let c = self.nodes[(block + i) as usize];
+                let c = self.node(block.wrapping_add(i))?;
                 if c.is_leaf() {
-                    for k in 0..c.len() {
-                        orphans[*n] = self.refs[(c.first + k) as usize];
-                        *n += 1;
+                    for k in 0..self.entries(&c)? {
+                        take(orphans, self.reference(c.first.wrapping_add(k))?)?;
                     }
-                    self.free_block(true, c.first);
+                    self.free_block(true, c.first)?;
                 } else {
-                    stack[sp] = (c.first, c.len());
+                    *stack.get_mut(sp).ok_or(BROKEN)? = (c.first, self.entries(&c)?);
                     sp += 1;
                 }
             }
-            self.free_block(false, block);
+            self.free_block(false, block)?;
         }
+        Ok(())
     }
 }
+
+/// What insert and delete return on a tree that breaks an invariant they
+/// rely on (an index past its slices, a node over M, a free list that
+/// runs dry): they never panic on memory a caller loaded.
+const BROKEN: Error = Error::Corrupt {
+    what: "R-tree invariant",
+};
 
 /// Guttman's quadratic split of `e` (M + 1 entries): true for entries of
 /// the second group. Each group gets at least `m`.

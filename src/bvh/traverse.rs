@@ -34,39 +34,6 @@ fn prim_cost(geom: u32, hit: bool, sphere_away: bool) -> u64 {
     }
 }
 
-/// The traversal's counters: the ray counters every structure keeps, and
-/// the thesis' box and object costs.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-#[repr(C)]
-pub struct BvhStats {
-    /// Rays, nodes visited (`traversal_steps`: boxes tested), primitive tests.
-    pub trace: TraceStats,
-    /// Hierarchy objects (boxes) tested.
-    pub box_tests: u64,
-    /// Their cost in thesis units.
-    pub box_cost: u64,
-    /// Cost of the actual objects (primitives) tested, in thesis units.
-    pub prim_cost: u64,
-}
-
-impl BvhStats {
-    /// Adds another call's counts.
-    pub fn add(&mut self, o: &BvhStats) {
-        self.trace.add(&o.trace);
-        self.box_tests += o.box_tests;
-        self.box_cost += o.box_cost;
-        self.prim_cost += o.prim_cost;
-    }
-    /// The thesis' average cost per hierarchy object.
-    pub fn cost_per_box(&self) -> f64 {
-        self.box_cost as f64 / (self.box_tests.max(1)) as f64
-    }
-    /// The thesis' average cost per actual object.
-    pub fn cost_per_prim(&self) -> f64 {
-        self.prim_cost as f64 / (self.trace.prim_tests.max(1)) as f64
-    }
-}
-
 /// Pushes `item` among the entries pushed since `base` (sorted far to near,
 /// so the nearest pops first).
 #[inline]
@@ -127,7 +94,40 @@ pub(crate) fn box_test(n: &BvhNode, r: &PreparedRay, t_max: f32) -> (Option<f32>
     (Some(t0), cost + BOX_POINT_COST)
 }
 
-impl Bvh<'_> {
+/// How a hierarchy's walk tests its entries: a node's volume (a 3D box,
+/// a 2D rectangle, or both) and, in a leaf of several objects, each
+/// object's own volume. The walk is the same for every hierarchy.
+pub(crate) trait EntryTest {
+    /// Entry distance into node `i` (whose 3D side is `node`) within
+    /// `t_max`, or `None`; charges the test to `st`. `None` too for a node
+    /// whose data lies outside the structure.
+    fn node(&self, i: u32, node: &BvhNode, t_max: f32, st: &mut TraceStats) -> Option<f32>;
+    /// Whether primitive `p`'s own entry in a leaf of several is met.
+    fn entry(&self, p: u32, t_max: f32, st: &mut TraceStats) -> bool;
+}
+
+/// The 3D hierarchies' test: the slab test on boxes.
+pub(crate) struct BoxTest<'r> {
+    pub scene: crate::Scene<'r>,
+    pub ray: &'r PreparedRay,
+}
+
+impl EntryTest for BoxTest<'_> {
+    #[inline(always)]
+    fn node(&self, _: u32, node: &BvhNode, t_max: f32, st: &mut TraceStats) -> Option<f32> {
+        let (t, cost) = box_test(node, self.ray, t_max);
+        st.box_tests += 1;
+        st.box_cost += cost;
+        t
+    }
+    #[inline(always)]
+    fn entry(&self, p: u32, t_max: f32, st: &mut TraceStats) -> bool {
+        let b = self.scene.prim_box(p as usize);
+        self.node(p, &BvhNode::leaf(&b, 0, 0), t_max, st).is_some()
+    }
+}
+
+impl<'a> Bvh<'a> {
     /// Tests primitive `p` and charges its cost.
     #[inline]
     pub(crate) fn test_prim(
@@ -135,76 +135,139 @@ impl Bvh<'_> {
         p: u32,
         r: &PreparedRay,
         t_max: f32,
-        st: &mut BvhStats,
+        st: &mut TraceStats,
     ) -> Option<Hit> {
-        st.trace.prim_tests += 1;
+        st.prim_tests += 1;
         let h = self.scene.intersect_prim(p as usize, r, t_max);
         let geom = self.scene.geom_of(p as usize);
         // Only a sphere's miss cost depends on more than the outcome.
-        let away = geom == GEOM_SPHERES && h.is_none() && {
-            let s = &self.scene.spheres[p as usize - self.scene.triangles.len()];
-            let oc = r.origin - crate::Vec3::from(s.center);
-            oc.length_squared() > s.radius * s.radius && oc.dot(r.dir) > 0.0
-        };
+        let away = geom == GEOM_SPHERES
+            && h.is_none()
+            && self
+                .scene
+                .spheres
+                .get((p as usize).wrapping_sub(self.scene.triangles.len()))
+                .is_some_and(|s| {
+                    let oc = r.origin - crate::Vec3::from(s.center);
+                    oc.length_squared() > s.radius * s.radius && oc.dot(r.dir) > 0.0
+                });
         st.prim_cost += prim_cost(geom, h.is_some(), away);
         h
     }
 
-    /// In a leaf of several objects (an R-tree's entries), each object's
-    /// own box is a hierarchy object too, tested before the object as the
-    /// R-tree's search and the thesis do. (A leaf of one object is its box.)
+    /// The references of leaf `n`, or `None` when they lie outside the refs.
     #[inline]
-    fn entry_hit(&self, p: u32, r: &PreparedRay, t_max: f32, st: &mut BvhStats) -> bool {
-        let b = self.scene.prim_box(p as usize);
-        let node = BvhNode::leaf(&b, 0, 0);
-        let (t, cost) = box_test(&node, r, t_max);
-        st.box_tests += 1;
-        st.box_cost += cost;
-        t.is_some()
+    pub(crate) fn leaf_refs(&self, n: &BvhNode) -> Option<&'a [u32]> {
+        self.refs.get(n.first as usize..)?.get(..n.len() as usize)
     }
 
-    /// The root's stack entry when the ray enters its box.
+    /// The children of interior node `n`, or `None` outside the nodes.
     #[inline]
-    fn enter_root(&self, r: &PreparedRay, st: &mut BvhStats) -> Option<BvhStackItem> {
-        let root = self.info.root;
-        let (t, cost) = box_test(&self.nodes[root as usize], r, r.t_max);
-        st.box_tests += 1;
-        st.box_cost += cost;
-        Some(BvhStackItem { node: root, t: t? })
+    pub(crate) fn children(&self, n: &BvhNode) -> Option<core::ops::Range<u32>> {
+        let end = n.first.checked_add(n.len())?;
+        (end as usize <= self.nodes.len()).then_some(n.first..end)
     }
 
-    /// Closest hit of `ray`, on the caller's `stack` (at least
-    /// [`Bvh::stack_len`] entries; a shorter one panics in debug builds and
-    /// is never overrun).
-    pub fn intersect(&self, ray: &Ray, stack: &mut [BvhStackItem], st: &mut BvhStats) -> Hit {
-        st.trace.rays += 1;
+    /// Closest hit of `ray`, on the caller's `stack` of at least
+    /// [`Bvh::stack_len`] entries.
+    ///
+    /// # Panics
+    /// When `stack` is shorter than [`Bvh::stack_len`].
+    pub fn intersect(&self, ray: &Ray, stack: &mut [BvhStackItem], st: &mut TraceStats) -> Hit {
+        self.check_stack(stack);
+        st.rays += 1;
         if !ray.is_valid() || self.info.ref_count == 0 {
             return Hit::MISS;
         }
         let r = PreparedRay::new(ray);
+        let test = BoxTest {
+            scene: self.scene,
+            ray: &r,
+        };
+        self.closest(&r, &test, stack, st)
+    }
+
+    /// True when anything lies on `ray`'s segment; the stack as for
+    /// [`Bvh::intersect`].
+    ///
+    /// # Panics
+    /// When `stack` is shorter than [`Bvh::stack_len`].
+    pub fn occluded(&self, ray: &Ray, stack: &mut [BvhStackItem], st: &mut TraceStats) -> bool {
+        self.check_stack(stack);
+        st.rays += 1;
+        if !ray.is_valid() || self.info.ref_count == 0 {
+            return false;
+        }
+        let r = PreparedRay::new(ray);
+        let test = BoxTest {
+            scene: self.scene,
+            ray: &r,
+        };
+        self.any(&r, &test, stack, st)
+    }
+
+    fn check_stack(&self, stack: &[BvhStackItem]) {
+        assert!(
+            stack.len() >= self.stack_len(),
+            "hierarchy traversal stack of {} entries: needs stack_len() = {}",
+            stack.len(),
+            self.stack_len()
+        );
+    }
+
+    /// The closest-hit walk of every hierarchy, nearest child first. It
+    /// visits each node at most once and never pushes past a stack of
+    /// [`Bvh::stack_len`] on a valid hierarchy; a walk that would, or that
+    /// meets an index outside the structure, stops with a fault.
+    #[inline(always)]
+    pub(crate) fn closest<T: EntryTest>(
+        &self,
+        r: &PreparedRay,
+        test: &T,
+        stack: &mut [BvhStackItem],
+        st: &mut TraceStats,
+    ) -> Hit {
         let mut best = Hit::MISS;
         let limit = |best: &Hit| if best.is_hit() { best.t } else { r.t_max };
-        let Some(root) = self.enter_root(&r, st) else {
+        let root = self.info.root;
+        let Some(t) = self
+            .nodes
+            .get(root as usize)
+            .and_then(|n| test.node(root, n, r.t_max, st))
+        else {
             return best;
         };
-        stack[0] = root;
+        let Some(first) = stack.first_mut() else {
+            st.faults += 1;
+            return best;
+        };
+        *first = BvhStackItem { node: root, t };
         let mut sp = 1;
+        let mut budget = self.nodes.len();
         while sp > 0 {
             sp -= 1;
             let item = stack[sp];
             if item.t > limit(&best) {
                 continue;
             }
-            let n = self.nodes[item.node as usize];
-            st.trace.traversal_steps += 1;
+            let Some(n) = self.nodes.get(item.node as usize).filter(|_| budget > 0) else {
+                st.faults += 1;
+                return best;
+            };
+            budget -= 1;
+            st.traversal_steps += 1;
             if n.is_leaf() {
-                st.trace.leaf_steps += 1;
-                let shared = n.len() > 1;
-                for &p in &self.refs[n.first as usize..(n.first + n.len()) as usize] {
-                    if shared && !self.entry_hit(p, &r, limit(&best), st) {
+                st.leaf_steps += 1;
+                let Some(refs) = self.leaf_refs(n) else {
+                    st.faults += 1;
+                    return best;
+                };
+                let shared = refs.len() > 1;
+                for &p in refs {
+                    if shared && !test.entry(p, limit(&best), st) {
                         continue;
                     }
-                    if let Some(h) = self.test_prim(p, &r, limit(&best), st) {
+                    if let Some(h) = self.test_prim(p, r, limit(&best), st) {
                         if !best.is_hit() || h.t < best.t || tie_wins(&h, &best) {
                             best = h;
                         }
@@ -212,14 +275,19 @@ impl Bvh<'_> {
                 }
                 continue;
             }
-            st.trace.interior_steps += 1;
+            st.interior_steps += 1;
+            let Some(kids) = self.children(n) else {
+                st.faults += 1;
+                return best;
+            };
             // Children hit, pushed far to near so the nearest pops first.
             let base = sp;
-            for c in n.first..n.first + n.len() {
-                let (t, cost) = box_test(&self.nodes[c as usize], &r, limit(&best));
-                st.box_tests += 1;
-                st.box_cost += cost;
-                if let Some(t) = t {
+            for c in kids {
+                if let Some(t) = test.node(c, &self.nodes[c as usize], limit(&best), st) {
+                    if sp == stack.len() {
+                        st.faults += 1;
+                        return best;
+                    }
                     push_nearest_last(stack, base, &mut sp, BvhStackItem { node: c, t });
                 }
             }
@@ -227,41 +295,71 @@ impl Bvh<'_> {
         best
     }
 
-    /// True when anything lies on `ray`'s segment.
-    pub fn occluded(&self, ray: &Ray, stack: &mut [BvhStackItem], st: &mut BvhStats) -> bool {
-        st.trace.rays += 1;
-        if !ray.is_valid() || self.info.ref_count == 0 {
-            return false;
-        }
-        let r = PreparedRay::new(ray);
-        let Some(root) = self.enter_root(&r, st) else {
+    /// The any-hit walk of every hierarchy, with the same bounds as
+    /// [`Bvh::closest`].
+    #[inline(always)]
+    pub(crate) fn any<T: EntryTest>(
+        &self,
+        r: &PreparedRay,
+        test: &T,
+        stack: &mut [BvhStackItem],
+        st: &mut TraceStats,
+    ) -> bool {
+        let root = self.info.root;
+        let Some(t) = self
+            .nodes
+            .get(root as usize)
+            .and_then(|n| test.node(root, n, r.t_max, st))
+        else {
             return false;
         };
-        stack[0] = root;
+        let Some(first) = stack.first_mut() else {
+            st.faults += 1;
+            return false;
+        };
+        *first = BvhStackItem { node: root, t };
         let mut sp = 1;
+        let mut budget = self.nodes.len();
         while sp > 0 {
             sp -= 1;
-            let n = self.nodes[stack[sp].node as usize];
-            st.trace.traversal_steps += 1;
+            let Some(n) = self
+                .nodes
+                .get(stack[sp].node as usize)
+                .filter(|_| budget > 0)
+            else {
+                st.faults += 1;
+                return false;
+            };
+            budget -= 1;
+            st.traversal_steps += 1;
             if n.is_leaf() {
-                st.trace.leaf_steps += 1;
-                let shared = n.len() > 1;
-                for &p in &self.refs[n.first as usize..(n.first + n.len()) as usize] {
-                    if shared && !self.entry_hit(p, &r, r.t_max, st) {
+                st.leaf_steps += 1;
+                let Some(refs) = self.leaf_refs(n) else {
+                    st.faults += 1;
+                    return false;
+                };
+                let shared = refs.len() > 1;
+                for &p in refs {
+                    if shared && !test.entry(p, r.t_max, st) {
                         continue;
                     }
-                    if self.test_prim(p, &r, r.t_max, st).is_some() {
+                    if self.test_prim(p, r, r.t_max, st).is_some() {
                         return true;
                     }
                 }
                 continue;
             }
-            st.trace.interior_steps += 1;
-            for c in n.first..n.first + n.len() {
-                let (t, cost) = box_test(&self.nodes[c as usize], &r, r.t_max);
-                st.box_tests += 1;
-                st.box_cost += cost;
-                if let Some(t) = t {
+            st.interior_steps += 1;
+            let Some(kids) = self.children(n) else {
+                st.faults += 1;
+                return false;
+            };
+            for c in kids {
+                if let Some(t) = test.node(c, &self.nodes[c as usize], r.t_max, st) {
+                    if sp == stack.len() {
+                        st.faults += 1;
+                        return false;
+                    }
                     stack[sp] = BvhStackItem { node: c, t };
                     sp += 1;
                 }

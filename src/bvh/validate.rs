@@ -1,7 +1,10 @@
 //! Structural checks of any built hierarchy, as for the kd-tree: run after
-//! every build in the tests, and by callers on memory they load.
+//! every build in the tests, and by callers on memory they load. One
+//! depth-first walk on the caller's traversal stack, visiting no more nodes
+//! than the hierarchy has: linear time, whatever the arena holds, and no
+//! panic on any of it.
 
-use super::{Bvh, BvhNode};
+use super::{Bvh, BvhNode, BvhStackItem};
 use crate::Error;
 
 fn corrupt(what: &'static str) -> Error {
@@ -22,76 +25,103 @@ pub struct BvhTreeStats {
 }
 
 impl Bvh<'_> {
-    /// Checks that every node's box is exactly the union of its entries'
-    /// (children, or the boxes of the primitives referenced), indices are
-    /// in range, no node has more than `max_children` entries, the depth
-    /// is within `info.depth`, and the leaves reference `info.ref_count`
-    /// primitives, all non-degenerate. With `min_children` (R-trees),
-    /// every node but the root has at least that many entries and all
-    /// leaves lie at one depth.
-    pub fn validate(&self, min_children: Option<u32>) -> Result<BvhTreeStats, Error> {
+    /// Checks that the nodes reached from the root form a tree of the
+    /// recorded depth and node count, every node's box is exactly the union
+    /// of its entries' (children, or the boxes of the primitives
+    /// referenced), indices are in range, no node has more than
+    /// `max_children` entries, and the leaves hold `info.ref_count`
+    /// references to non-degenerate primitives with the recorded digest.
+    /// With `min_children` (R-trees), every node but the root has at least
+    /// that many entries and all leaves lie at one depth. `stack` is the
+    /// traversal stack ([`Bvh::stack_len`] entries).
+    ///
+    /// Never panics, in time linear in the hierarchy. Once it accepts a
+    /// hierarchy, every traversal of it gives the hits of a clean build
+    /// with the same references.
+    pub fn validate(
+        &self,
+        min_children: Option<u32>,
+        stack: &mut [BvhStackItem],
+    ) -> Result<BvhTreeStats, Error> {
+        self.validate_with(min_children, stack, |_, _| Ok(()))
+    }
+
+    /// [`Bvh::validate`], calling `extra(index, node)` on every node it
+    /// reaches (the projection hierarchies check their rectangles there).
+    pub(crate) fn validate_with(
+        &self,
+        min_children: Option<u32>,
+        stack: &mut [BvhStackItem],
+        mut extra: impl FnMut(u32, &BvhNode) -> Result<(), Error>,
+    ) -> Result<BvhTreeStats, Error> {
+        let info = &self.info;
+        if info.depth >= info.node_count.max(1)
+            || info.node_count as usize > self.nodes.len()
+            || info.ref_count as usize > self.refs.len()
+            || !(2..=crate::limits::RTREE_MAX_CHILDREN).contains(&info.max_children)
+        {
+            return Err(corrupt("counts"));
+        }
+        let need = self.stack_len();
+        if stack.len() < need {
+            return Err(Error::SliceTooSmall {
+                slice: "stack",
+                needed: need,
+                got: stack.len(),
+            });
+        }
         let mut st = BvhTreeStats::default();
-        let root = self.info.root as usize;
-        if root >= self.nodes.len() {
-            return Err(corrupt("root out of range"));
-        }
-        // (node, depth), depth-first on a stack bounded like the traversal's.
-        let cap = 1 + self.info.depth as usize * self.info.max_children.max(2) as usize;
-        let mut stack = [(0u32, 0u32); 4096];
-        if cap > stack.len() {
-            return self.validate_deep(min_children);
-        }
-        stack[0] = (root as u32, 0);
+        let mut digest = 0u64;
+        // (node, depth), depth-first; the depth rides in the t field.
+        let item = |node: u32, d: u32| BvhStackItem {
+            node,
+            t: f32::from_bits(d),
+        };
+        stack[0] = item(info.root, 0);
         let mut sp = 1;
         let mut leaf_depth = None;
         while sp > 0 {
             sp -= 1;
-            let (i, d) = stack[sp];
-            let nd = self.nodes[i as usize];
+            let (i, d) = (stack[sp].node, stack[sp].t.to_bits());
+            if st.nodes == info.node_count {
+                return Err(corrupt("more nodes reached than the hierarchy has"));
+            }
+            let nd = *self
+                .nodes
+                .get(i as usize)
+                .ok_or(corrupt("node out of range"))?;
             self.check_node(
                 &nd,
-                i as usize == root,
+                i == info.root,
                 d,
                 min_children,
                 &mut leaf_depth,
                 &mut st,
             )?;
-            if !nd.is_leaf() {
-                for c in nd.first..nd.first + nd.len() {
-                    stack[sp] = (c, d + 1);
-                    sp += 1;
+            extra(i, &nd)?;
+            if nd.is_leaf() {
+                for &p in self.leaf_refs(&nd).unwrap_or(&[]) {
+                    digest = digest.wrapping_add(crate::rng::ref_mix(p));
                 }
+                continue;
+            }
+            for c in self.children(&nd).ok_or(corrupt("children out of range"))? {
+                if sp == stack.len() {
+                    return Err(corrupt("node deeper than the recorded depth"));
+                }
+                stack[sp] = item(c, d + 1);
+                sp += 1;
             }
         }
-        if st.refs != self.info.ref_count {
+        if st.refs != info.ref_count {
             return Err(corrupt("leaves hold a different number of references"));
         }
-        Ok(st)
-    }
-
-    /// The same checks for trees too deep for the fixed stack (a
-    /// degenerate bottom-up build): nodes are visited by index instead,
-    /// which checks everything but the depth bound and reachability.
-    fn validate_deep(&self, min_children: Option<u32>) -> Result<BvhTreeStats, Error> {
-        let mut st = BvhTreeStats::default();
-        let mut leaf_depth = None;
-        let root = self.info.root as usize;
-        self.check_node(
-            &self.nodes[root],
-            true,
-            0,
-            min_children,
-            &mut leaf_depth,
-            &mut st,
-        )?;
-        for i in 1..self.info.node_count as usize {
-            let nd = self.nodes[i];
-            self.check_node(&nd, false, 0, None, &mut None, &mut st)?;
+        if st.nodes != info.node_count {
+            return Err(corrupt("nodes reached differ from the node count"));
         }
-        if st.refs != self.info.ref_count {
-            return Err(corrupt("leaves hold a different number of references"));
+        if digest != info.ref_digest() {
+            return Err(corrupt("reference digest"));
         }
-        st.depth = self.info.depth;
         Ok(st)
     }
 
@@ -109,21 +139,21 @@ impl Bvh<'_> {
             return Err(corrupt("node deeper than the recorded depth"));
         }
         let n = nd.len();
-        if !nd.is_leaf() && n > self.info.max_children {
-            return Err(corrupt("node with more children than allowed"));
+        if n > self.info.max_children && (!nd.is_leaf() || min_children.is_some()) {
+            return Err(corrupt("node with more entries than allowed"));
         }
         if let Some(m) = min_children {
             if !is_root && n < m {
                 return Err(corrupt("node below the minimum fill"));
             }
-            if nd.is_leaf() && n > self.info.max_children {
-                return Err(corrupt("leaf above the maximum fill"));
-            }
         }
         let mut b = crate::Aabb::EMPTY;
         if nd.is_leaf() {
             st.leaves += 1;
-            st.refs += n;
+            st.refs = st
+                .refs
+                .checked_add(n)
+                .ok_or(corrupt("references out of range"))?;
             st.depth = st.depth.max(d);
             if min_children.is_some() {
                 if leaf_depth.is_some_and(|x| x != d) {
@@ -131,11 +161,7 @@ impl Bvh<'_> {
                 }
                 *leaf_depth = Some(d);
             }
-            let end = nd.first as usize + n as usize;
-            let refs = self
-                .refs
-                .get(nd.first as usize..end)
-                .ok_or(corrupt("refs out of range"))?;
+            let refs = self.leaf_refs(nd).ok_or(corrupt("refs out of range"))?;
             for &p in refs {
                 let pb = self
                     .scene
@@ -147,13 +173,9 @@ impl Bvh<'_> {
             if n == 0 {
                 return Err(corrupt("interior node without children"));
             }
-            let end = nd.first as usize + n as usize;
-            let kids = self
-                .nodes
-                .get(nd.first as usize..end)
-                .ok_or(corrupt("children out of range"))?;
+            let kids = self.children(nd).ok_or(corrupt("children out of range"))?;
             for k in kids {
-                b = b.union(&k.bounds());
+                b = b.union(&self.nodes[k as usize].bounds());
             }
         }
         if n > 0 && b != nd.bounds() {

@@ -74,8 +74,9 @@ impl<'a> Scene<'a> {
         [v(t[0]), v(t[1]), v(t[2])]
     }
 
-    /// The box of primitive `prim`, known to be valid (a structure's
-    /// reference): [`Scene::prim_bounds`] without its checks.
+    /// The box of primitive `prim`, a structure's reference:
+    /// [`Scene::prim_bounds`] without its degeneracy checks (empty for an
+    /// index past the scene, which only a corrupt structure holds).
     #[inline]
     pub(crate) fn prim_box(&self, prim: usize) -> Aabb {
         let nt = self.triangles.len();
@@ -89,12 +90,15 @@ impl<'a> Scene<'a> {
         } else if prim < nt + ns {
             self.spheres[prim - nt].bounds()
         } else {
-            self.cones[prim - nt - ns].bounds()
+            self.cones
+                .get(prim - nt - ns)
+                .map_or(Aabb::EMPTY, |c| c.bounds())
         }
     }
 
     /// Bounds of primitive `prim` (global index), or `None` when it is
-    /// degenerate (zero area, zero or negative radius, NaN or infinite).
+    /// degenerate (zero area, zero or negative radius, NaN or infinite) or
+    /// past the scene.
     pub fn prim_bounds(&self, prim: usize) -> Option<Aabb> {
         let nt = self.triangles.len();
         let ns = self.spheres.len();
@@ -115,7 +119,7 @@ impl<'a> Scene<'a> {
             }
             s.bounds()
         } else {
-            let c = &self.cones[prim - nt - ns];
+            let c = self.cones.get(prim - nt - ns)?;
             if !c.is_valid() {
                 return None;
             }

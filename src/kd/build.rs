@@ -88,11 +88,11 @@ impl Task {
     }
 }
 
-/// The best plane of a node's sweep.
 /// Thickness of the cell that cuts planar primitives off a node's face,
 /// relative to the node's extent or coordinates (see `find_split`).
-const FACE_CELL: f32 = 1.0 / 4096.0;
+use crate::tolerance::FACE_CELL;
 
+/// The best plane of a node's sweep.
 #[derive(Clone, Copy, Debug)]
 struct Split {
     axis: usize,
@@ -130,6 +130,9 @@ fn with_min(b: &Aabb, axis: usize, v: f32) -> Aabb {
     r
 }
 
+/// Most nodes a tree holds: indices live in 30 bits.
+const MAX_NODES: usize = crate::limits::MAX_PRIMS - 1;
+
 struct Builder<'s, 'a> {
     scene: &'s Scene<'s>,
     params: KdParams,
@@ -162,7 +165,7 @@ struct Builder<'s, 'a> {
 /// slices shorter than [`min_requirements`]. With less room than
 /// [`super::requirements`] it stops splitting where room runs out, stays
 /// correct, and sets [`KD_FLAG_TRUNCATED`] in the tree's info.
-pub fn build_sah<'a>(
+pub fn build<'a>(
     scene: &Scene<'a>,
     params: &KdParams,
     storage: KdStorage<'a>,
@@ -193,8 +196,9 @@ pub fn build_sah<'a>(
         .nodes
         .len()
         .min(2 * storage.leaves.len() - 1)
-        .min(1 << 30);
-    let leaf_cap = storage.leaves.len().min(1 << 30);
+        .min(MAX_NODES);
+    // Below 2^30 - 1: no leaf takes the index of KdNode::FAULT's record.
+    let leaf_cap = storage.leaves.len().min(MAX_NODES / 2);
     let mut b = Builder {
         scene,
         params: *params,
@@ -242,6 +246,10 @@ pub fn build_sah<'a>(
         flags: if b.truncated { KD_FLAG_TRUNCATED } else { 0 },
         bounds_min: bounds.min.into(),
         bounds_max: bounds.max.into(),
+        ref_digest: {
+            let d = crate::rng::ref_digest(b.refs[..b.ref_top].iter().copied());
+            [d as u32, (d >> 32) as u32]
+        },
     };
     let (node_top, leaf_top, ref_top) = (b.node_top, b.leaf_top, b.ref_top);
     let (nodes, leaves, ropes, refs) = (b.nodes, b.leaves, b.ropes, b.refs);
@@ -403,7 +411,7 @@ impl<'s, 'a> Builder<'s, 'a> {
                     let cl = cost(pl, pr, nl + planars, nr);
                     let cr = cost(pl, pr, nl, nr + planars);
                     let (c, planar_left) = if cl <= cr { (cl, true) } else { (cr, false) };
-                    if best.map_or(true, |b| c < b.cost) {
+                    if best.is_none_or(|b| c < b.cost) {
                         best = Some(Split {
                             axis,
                             pos,

@@ -4,19 +4,22 @@
 //! ```text
 //! let req = kd::requirements(scene.prim_count(), &params);   // element counts
 //! // caller provides slices of those lengths
-//! let tree = kd::build_sah(&scene, &params, storage, scratch)?;
-//! let hit = tree.intersect(&ray, Traversal::Hierarchical, &mut stats);
+//! let tree = kd::build(&scene, &params, storage, scratch)?;
+//! let mut stack = [KdStackItem::default(); KD_STACK_LEN];
+//! let hit = tree.intersect(&ray, Traversal::Hierarchical, &mut stack, &mut stats);
 //! ```
 
 mod build;
+pub mod layout;
 mod node;
 mod ropes;
 pub(crate) mod traverse;
 mod validate;
 
-pub use build::{build_sah, KdEvent};
+pub use build::{build, KdEvent};
 pub use node::{
-    KdInfo, KdLeaf, KdNode, KdRopes, KD_FLAG_TRUNCATED, KD_MAGIC, KD_MAX_DEPTH, KD_VERSION, NO_NODE,
+    KdInfo, KdLeaf, KdNode, KdRopes, KdStackItem, KD_FLAG_TRUNCATED, KD_MAGIC, KD_MAX_DEPTH,
+    KD_STACK_LEN, KD_VERSION, NO_NODE,
 };
 pub use traverse::{Decision, Traversal};
 pub use validate::KdTreeStats;
@@ -203,27 +206,28 @@ pub struct KdScratch<'s> {
 }
 
 /// A built kd-tree borrowing its parts and the scene it was built on.
-/// Immutable: share it between threads.
+/// Immutable: share it between threads. Made only by [`build`] and by
+/// [`KdTree::from_parts`].
 #[derive(Clone, Copy, Debug)]
 pub struct KdTree<'a> {
-    /// The primitives the references name.
-    pub scene: Scene<'a>,
-    /// Counts, bounds, scene fingerprint.
-    pub info: KdInfo,
+    pub(crate) scene: Scene<'a>,
+    pub(crate) info: KdInfo,
     /// `info.node_count` nodes; node 0 is the root.
-    pub nodes: &'a [KdNode],
+    pub(crate) nodes: &'a [KdNode],
     /// `info.leaf_count` leaf records.
-    pub leaves: &'a [KdLeaf],
+    pub(crate) leaves: &'a [KdLeaf],
     /// `info.leaf_count` rope records.
-    pub ropes: &'a [KdRopes],
+    pub(crate) ropes: &'a [KdRopes],
     /// `info.ref_count` references (global primitive indices).
-    pub refs: &'a [u32],
+    pub(crate) refs: &'a [u32],
 }
 
 impl<'a> KdTree<'a> {
     /// Reassembles a tree from parts read back from memory, with O(1) checks
     /// (magic, version, counts within the slices, the scene's counts). Run
-    /// [`KdTree::validate`] on parts from untrusted storage before tracing.
+    /// [`KdTree::validate`] on parts from untrusted storage: until it
+    /// accepts them, traversal never panics or hangs on them, but may stop
+    /// early with [`crate::TraceStats::faults`] counted.
     pub fn from_parts(
         scene: Scene<'a>,
         info: KdInfo,
@@ -269,5 +273,21 @@ impl<'a> KdTree<'a> {
             return Err(Error::SceneMismatch);
         }
         Ok(())
+    }
+
+    /// Counts, bounds, scene fingerprint: what an arena header records.
+    pub fn info(&self) -> &KdInfo {
+        &self.info
+    }
+
+    /// The scene the tree was built on.
+    pub fn scene(&self) -> &Scene<'a> {
+        &self.scene
+    }
+
+    /// The tree's parts: nodes (node 0 the root), leaf records, their
+    /// boxes and ropes, and the references (global primitive indices).
+    pub fn parts(&self) -> (&'a [KdNode], &'a [KdLeaf], &'a [KdRopes], &'a [u32]) {
+        (self.nodes, self.leaves, self.ropes, self.refs)
     }
 }

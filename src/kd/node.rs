@@ -9,9 +9,25 @@ use glam::Vec3;
 /// "No node": a rope that leads out of the scene, an exit point with no node.
 pub const NO_NODE: u32 = u32::MAX;
 
-/// Deepest tree any build makes; traversal stacks are sized from it, so
-/// they cannot overflow.
-pub const KD_MAX_DEPTH: u32 = 60;
+pub use crate::limits::KD_MAX_DEPTH;
+
+/// Entries of the stack every kd traversal takes ([`KdStackItem`]s): two
+/// exit points per level of the deepest tree, and a few to spare.
+pub const KD_STACK_LEN: usize = 2 * KD_MAX_DEPTH as usize + 4;
+
+/// One entry of a kd traversal stack: an exit point of TA_B^rec, the node
+/// to visit after the current segment, the signed distance and the point
+/// where that segment ends. Plain data: the caller owns the stack.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C)]
+pub struct KdStackItem {
+    /// Node to visit next.
+    pub node: u32,
+    /// Distance where the segment ends.
+    pub t: f32,
+    /// Point where the segment ends.
+    pub p: [f32; 3],
+}
 
 /// One node in 8 bytes. `word & 3` is the split axis (0, 1, 2) or 3 for a
 /// leaf; `word >> 2` is the index of the left child (the right child follows
@@ -26,6 +42,14 @@ pub struct KdNode {
 }
 
 impl KdNode {
+    /// What a traversal reads for a node index past the tree: a leaf whose
+    /// record no tree has (builds make fewer than 2^30 - 1 leaves), so the
+    /// walk stops there with a fault.
+    pub const FAULT: KdNode = KdNode {
+        word: u32::MAX,
+        data: 0,
+    };
+
     /// An interior node splitting `axis` at `split`, children at `left` and `left + 1`.
     pub fn interior(axis: usize, split: f32, left: u32) -> KdNode {
         KdNode {
@@ -91,6 +115,14 @@ pub struct KdRopes {
     pub max: [f32; 3],
 }
 
+/// What a traversal reads for a leaf record past the tree: no ropes and a
+/// NaN box, which no ray enters or leaves.
+pub(crate) static FAULT_ROPES: KdRopes = KdRopes {
+    neighbor: [NO_NODE; 6],
+    min: [f32::NAN; 3],
+    max: [f32::NAN; 3],
+};
+
 impl KdRopes {
     /// `p`, where a ray leaves the leaf through face `face`, put on that
     /// face exactly: located beyond the face, it cannot round back into
@@ -121,7 +153,7 @@ impl KdRopes {
 /// Magic word of a kd-tree's [`KdInfo`]: "CRKD".
 pub const KD_MAGIC: u32 = u32::from_le_bytes(*b"CRKD");
 /// Layout version of [`KdInfo`] and the node types.
-pub const KD_VERSION: u32 = 1;
+pub const KD_VERSION: u32 = 2;
 
 /// Flag in [`KdInfo::flags`]: a capacity stopped splitting somewhere.
 pub const KD_FLAG_TRUNCATED: u32 = 1;
@@ -157,9 +189,16 @@ pub struct KdInfo {
     pub bounds_min: [f32; 3],
     /// Upper corner of the root box.
     pub bounds_max: [f32; 3],
+    /// [`crate::rng::ref_digest`] of the references, low and high words.
+    pub ref_digest: [u32; 2],
 }
 
 impl KdInfo {
+    /// The recorded reference digest.
+    pub fn ref_digest(&self) -> u64 {
+        self.ref_digest[0] as u64 | (self.ref_digest[1] as u64) << 32
+    }
+
     /// Root box.
     pub fn bounds(&self) -> Aabb {
         Aabb {
@@ -169,7 +208,7 @@ impl KdInfo {
     }
 
     /// The box every traversal clips rays to: the root box widened by
-    /// 2^-19 of its largest coordinate or extent. A primitive's own test
+    /// [`crate::tolerance::LEAF_EXIT_MARGIN`] of its largest coordinate or extent. A primitive's own test
     /// may report a hit point a few ulps outside the root box (a triangle
     /// on the box's face, met at a slant); clipped to the exact box, the
     /// ray's exit point can round onto the wrong side of a split near it,
@@ -186,7 +225,7 @@ impl KdInfo {
             .max(b.max.abs())
             .max(b.max - b.min)
             .max_element();
-        let e = Vec3::splat(m * (1.0 / 524_288.0));
+        let e = Vec3::splat(m * crate::tolerance::LEAF_EXIT_MARGIN);
         Aabb {
             min: b.min - e,
             max: b.max + e,

@@ -3,17 +3,18 @@
 //! ray loop; each walk is generic over what a leaf visit does, so closest
 //! and any hit share one walk without a branch on the query kind.
 
-use super::node::{KdNode, KD_MAX_DEPTH, NO_NODE};
+use super::node::{KdNode, KdStackItem, KD_STACK_LEN, NO_NODE};
 use super::KdTree;
 use crate::geom::{Hit, PreparedRay, Ray, Scene, Vec3};
+use crate::limits::KD_MAX_DEPTH;
 use crate::TraceStats;
 
 /// How a ray walks the tree.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Traversal {
     /// Stack traversal with signed entry and exit distances (Havran's
-    /// TA_B^rec). The stack lives on the call stack and holds
-    /// `2 * KD_MAX_DEPTH + 4` exit points: enough for any tree.
+    /// TA_B^rec), on the caller's stack of [`KD_STACK_LEN`] exit points:
+    /// enough for any tree.
     Hierarchical,
     /// Leaf to leaf through the six ropes of each leaf; no stack. A ray
     /// that lies exactly in a split plane it must cross falls back to
@@ -78,11 +79,11 @@ pub(crate) fn tie_wins(h: &Hit, best: &Hit) -> bool {
 }
 
 /// Whether a hit at `t` lies clearly before a leaf's exit at `exit_t`, by
-/// more than the rounding of either (a few ulps, taken as 2^-19 of t): only
-/// then can no primitive of a later leaf be hit at the same t.
+/// more than the rounding of either ([`crate::tolerance::LEAF_EXIT_MARGIN`]
+/// of t): only then can no primitive of a later leaf be hit at the same t.
 #[inline]
 pub(crate) fn inside_leaf(t: f32, exit_t: f32) -> bool {
-    exit_t - t > t.abs() * (1.0 / 524_288.0)
+    exit_t - t > t.abs() * crate::tolerance::LEAF_EXIT_MARGIN
 }
 
 /// Any hit: stops at the first.
@@ -156,6 +157,9 @@ pub(crate) struct Steps {
     pub interior: u64,
     pub leaves: u64,
     pub empty: u64,
+    /// Walks cut short by a broken invariant of the tree (see
+    /// [`TraceStats::faults`]).
+    pub faults: u64,
 }
 
 impl Steps {
@@ -164,6 +168,13 @@ impl Steps {
         stats.leaf_steps += self.leaves;
         stats.empty_leaf_steps += self.empty;
         stats.traversal_steps += self.interior + self.leaves;
+        stats.faults += (self.faults > 0) as u64;
+    }
+
+    /// Records a broken invariant; the walk then stops.
+    #[cold]
+    pub fn fault(&mut self) {
+        self.faults += 1;
     }
 }
 
@@ -178,36 +189,26 @@ pub(crate) enum RopeEnd {
     Fallback,
 }
 
-/// An exit point of TA_B^rec: the node to visit after the current segment,
-/// the signed distance and the point where the segment ends.
-#[derive(Clone, Copy)]
-pub(crate) struct ExitPoint {
-    node: u32,
-    t: f32,
-    p: Vec3,
-}
-
-/// The traversal stack: exit points for the deepest tree any build makes.
-/// Callers that walk many subtrees for one ray (HLCTS) make it once.
-pub(crate) type TraversalStack = [ExitPoint; STACK_SIZE];
-
-/// A stack ready for [`KdTree::walk_from`].
-pub(crate) fn new_stack() -> TraversalStack {
-    [ExitPoint {
-        node: NO_NODE,
-        t: 0.0,
-        p: Vec3::ZERO,
-    }; STACK_SIZE]
-}
-
 /// Marks an exit point pushed only to end a segment that is then
 /// restarted (a ray lying in a split plane visits both children).
 const SKIP: u32 = NO_NODE - 1;
-const STACK_SIZE: usize = 2 * KD_MAX_DEPTH as usize + 4;
 
 impl<'a> KdTree<'a> {
-    /// Closest hit of `ray`, or [`Hit::MISS`]. Adds its work to `stats`.
-    pub fn intersect(&self, ray: &Ray, method: Traversal, stats: &mut TraceStats) -> Hit {
+    /// Closest hit of `ray`, or [`Hit::MISS`], on the caller's `stack` of
+    /// at least [`KD_STACK_LEN`] entries (rope traversal uses it only for
+    /// rays that lie in a split plane). Adds its work to `stats`.
+    ///
+    /// # Panics
+    /// When `stack` is shorter than [`KD_STACK_LEN`].
+    #[inline]
+    pub fn intersect(
+        &self,
+        ray: &Ray,
+        method: Traversal,
+        stack: &mut [KdStackItem],
+        stats: &mut TraceStats,
+    ) -> Hit {
+        check_stack(stack);
         stats.rays += 1;
         if !ray.is_valid() {
             return Hit::MISS;
@@ -215,36 +216,30 @@ impl<'a> KdTree<'a> {
         let mut v = Closest::new(ray);
         let mut steps = Steps::default();
         match method {
-            Traversal::Hierarchical => self.walk_hierarchical(&mut v, &mut NoRecord, &mut steps),
-            Traversal::Ropes => self.walk_ropes(&mut v, &mut steps),
+            Traversal::Hierarchical => {
+                self.walk_hierarchical(&mut v, &mut NoRecord, stack, &mut steps)
+            }
+            Traversal::Ropes => self.walk_ropes(&mut v, stack, &mut steps),
         };
         steps.flush(stats);
         stats.prim_tests += v.tests;
         v.best
     }
 
-    /// [`KdTree::intersect`] with hierarchical traversal on a stack the
-    /// caller keeps across rays: a loop of rays initialises it once.
-    pub(crate) fn intersect_on(
+    /// True when anything lies on `ray` within `[t_min, t_max]`; the stack
+    /// as for [`KdTree::intersect`].
+    ///
+    /// # Panics
+    /// When `stack` is shorter than [`KD_STACK_LEN`].
+    #[inline]
+    pub fn occluded(
         &self,
         ray: &Ray,
-        stack: &mut TraversalStack,
+        method: Traversal,
+        stack: &mut [KdStackItem],
         stats: &mut TraceStats,
-    ) -> Hit {
-        stats.rays += 1;
-        if !ray.is_valid() {
-            return Hit::MISS;
-        }
-        let mut v = Closest::new(ray);
-        let mut steps = Steps::default();
-        self.walk_hierarchical_on(&mut v, &mut NoRecord, stack, &mut steps);
-        steps.flush(stats);
-        stats.prim_tests += v.tests;
-        v.best
-    }
-
-    /// True when anything lies on `ray` within `[t_min, t_max]`.
-    pub fn occluded(&self, ray: &Ray, method: Traversal, stats: &mut TraceStats) -> bool {
+    ) -> bool {
+        check_stack(stack);
         stats.rays += 1;
         if !ray.is_valid() {
             return false;
@@ -256,44 +251,48 @@ impl<'a> KdTree<'a> {
         };
         let mut steps = Steps::default();
         match method {
-            Traversal::Hierarchical => self.walk_hierarchical(&mut v, &mut NoRecord, &mut steps),
-            Traversal::Ropes => self.walk_ropes(&mut v, &mut steps),
+            Traversal::Hierarchical => {
+                self.walk_hierarchical(&mut v, &mut NoRecord, stack, &mut steps)
+            }
+            Traversal::Ropes => self.walk_ropes(&mut v, stack, &mut steps),
         };
         steps.flush(stats);
         stats.prim_tests += v.tests;
         v.hit
     }
 
-    /// Closest hits of many rays; `hits` must be as long as `rays`.
-    pub fn intersect_many(
-        &self,
-        rays: &[Ray],
-        hits: &mut [Hit],
-        method: Traversal,
-        stats: &mut TraceStats,
-    ) {
-        for (r, h) in rays.iter().zip(hits.iter_mut()) {
-            *h = self.intersect(r, method, stats);
-        }
-    }
-
-    /// Any-hit answers for many rays; `out` must be as long as `rays`.
-    pub fn occluded_many(
-        &self,
-        rays: &[Ray],
-        out: &mut [bool],
-        method: Traversal,
-        stats: &mut TraceStats,
-    ) {
-        for (r, o) in rays.iter().zip(out.iter_mut()) {
-            *o = self.occluded(r, method, stats);
-        }
-    }
-
+    /// Node `i`, or [`KdNode::FAULT`] (a leaf no tree has) when `i` lies
+    /// past the nodes: a corrupt tree ends a walk at a fault, never a panic.
     #[inline]
-    pub(crate) fn leaf_refs(&self, node: KdNode) -> &[u32] {
-        let l = self.leaves[node.index() as usize];
-        &self.refs[l.first_ref as usize..(l.first_ref + l.ref_count) as usize]
+    pub(crate) fn node(&self, i: u32) -> KdNode {
+        self.nodes.get(i as usize).copied().unwrap_or(KdNode::FAULT)
+    }
+
+    /// The box and ropes of leaf record `leaf` ([`KdRopes::FAULT`] past the
+    /// records: a NaN box no ray enters or leaves, no ropes).
+    #[inline]
+    pub(crate) fn rope(&self, leaf: u32) -> &super::KdRopes {
+        self.ropes
+            .get(leaf as usize)
+            .unwrap_or(&super::node::FAULT_ROPES)
+    }
+
+    /// Whether leaf record `leaf` holds no primitive (a missing one holds none).
+    #[inline]
+    pub(crate) fn leaf_is_empty(&self, leaf: u32) -> bool {
+        self.leaves
+            .get(leaf as usize)
+            .is_none_or(|l| l.ref_count == 0)
+    }
+
+    /// The primitive references of leaf node `nd`, or `None` when its leaf
+    /// record or reference range lies outside the tree (a fault).
+    #[inline]
+    pub(crate) fn leaf_refs(&self, nd: KdNode) -> Option<&[u32]> {
+        let l = self.leaves.get(nd.index() as usize)?;
+        self.refs
+            .get(l.first_ref as usize..)?
+            .get(..l.ref_count as usize)
     }
 
     /// The part of `r`'s segment inside the scene's box
@@ -305,24 +304,13 @@ impl<'a> KdTree<'a> {
             .clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max)
     }
 
-    /// Hierarchical traversal from the root; true when the visitor stopped
-    /// it. The stack is made only for a ray that meets the scene's box.
+    /// Hierarchical traversal from the root on the caller's stack; true
+    /// when the visitor stopped it (or a fault did).
     pub(crate) fn walk_hierarchical<V: LeafVisitor, R: Recorder>(
         &self,
         v: &mut V,
         rec: &mut R,
-        steps: &mut Steps,
-    ) -> bool {
-        self.scene_segment(v.ray())
-            .is_some_and(|(t0, t1)| self.walk_from(v, rec, &mut new_stack(), 0, t0, t1, steps))
-    }
-
-    /// [`KdTree::walk_hierarchical`] on the caller's stack.
-    pub(crate) fn walk_hierarchical_on<V: LeafVisitor, R: Recorder>(
-        &self,
-        v: &mut V,
-        rec: &mut R,
-        stack: &mut TraversalStack,
+        stack: &mut [KdStackItem],
         steps: &mut Steps,
     ) -> bool {
         self.scene_segment(v.ray())
@@ -331,30 +319,43 @@ impl<'a> KdTree<'a> {
 
     /// TA_B^rec over the subtree of `start`, for the ray's segment
     /// `[t0, t1]` inside that node's box, on the caller's `stack`. True when
-    /// the visitor stopped it.
+    /// the visitor stopped it. A valid tree is walked visiting each node at
+    /// most once and pushing at most two exit points per level; a walk that
+    /// would visit more nodes than the tree has, or push past the stack,
+    /// meets a broken tree: it stops with a fault.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn walk_from<V: LeafVisitor, R: Recorder>(
         &self,
         v: &mut V,
         rec: &mut R,
-        stack: &mut TraversalStack,
+        stack: &mut [KdStackItem],
         start: u32,
         t0: f32,
         t1: f32,
         steps: &mut Steps,
     ) -> bool {
+        let Some(stack) = stack.get_mut(..KD_STACK_LEN) else {
+            steps.fault();
+            return true;
+        };
         let r = *v.ray();
-        stack[0] = ExitPoint {
+        stack[0] = KdStackItem {
             node: NO_NODE,
             t: t1,
-            p: r.at(t1),
+            p: r.at(t1).to_array(),
         };
         let mut ex = 0usize;
         let mut en_p = r.at(t0);
         let mut node = start;
+        let mut budget = self.nodes.len();
         loop {
-            let mut nd = self.nodes[node as usize];
+            let mut nd = self.node(node);
             while !nd.is_leaf() {
+                if budget == 0 || ex + 2 >= KD_STACK_LEN {
+                    steps.fault();
+                    return true;
+                }
+                budget -= 1;
                 steps.interior += 1;
                 let (a, s, left) = (nd.axis(), nd.split(), nd.index());
                 let ex_pa = stack[ex].p[a];
@@ -365,50 +366,58 @@ impl<'a> KdTree<'a> {
                             // The segment lies in the plane: left, then right again.
                             rec.interior(node, Decision::LeftRight);
                             let x = stack[ex];
-                            stack[ex + 1] = ExitPoint {
-                                node: left + 1,
+                            stack[ex + 1] = KdStackItem {
+                                node: left.wrapping_add(1),
                                 t: 0.0,
-                                p: en_p,
+                                p: en_p.to_array(),
                             };
-                            stack[ex + 2] = ExitPoint { node: SKIP, ..x };
+                            stack[ex + 2] = KdStackItem { node: SKIP, ..x };
                             ex += 2;
                         } else {
                             rec.interior(node, Decision::Left);
                         }
                         node = left;
-                        nd = self.nodes[node as usize];
+                        nd = self.node(node);
                         continue;
                     }
                     if en_p[a] == s {
                         rec.interior(node, Decision::Right);
-                        node = left + 1;
-                        nd = self.nodes[node as usize];
+                        node = left.wrapping_add(1);
+                        nd = self.node(node);
                         continue;
                     }
                     rec.interior(node, Decision::LeftRight);
-                    far = left + 1;
+                    far = left.wrapping_add(1);
                     node = left;
                 } else {
                     if s < ex_pa {
                         rec.interior(node, Decision::Right);
-                        node = left + 1;
-                        nd = self.nodes[node as usize];
+                        node = left.wrapping_add(1);
+                        nd = self.node(node);
                         continue;
                     }
                     rec.interior(node, Decision::RightLeft);
                     far = left;
-                    node = left + 1;
+                    node = left.wrapping_add(1);
                 }
-                nd = self.nodes[node as usize];
+                nd = self.node(node);
                 let t = (s - r.origin[a]) * r.inv_dir[a];
                 let mut p = r.at(t);
                 p[a] = s;
                 ex += 1;
-                stack[ex] = ExitPoint { node: far, t, p };
+                stack[ex] = KdStackItem {
+                    node: far,
+                    t,
+                    p: p.to_array(),
+                };
             }
             steps.leaves += 1;
             rec.leaf(node, nd.index());
-            let refs = self.leaf_refs(nd);
+            let Some(refs) = self.leaf_refs(nd).filter(|_| budget > 0) else {
+                steps.fault();
+                return true;
+            };
+            budget -= 1;
             steps.empty += refs.is_empty() as u64;
             if v.visit(&self.scene, refs, stack[ex].t) {
                 // What is still on the stack was pushed and never visited.
@@ -425,7 +434,7 @@ impl<'a> KdTree<'a> {
                     return false;
                 }
                 ex -= 1;
-                en_p = e.p;
+                en_p = Vec3::from(e.p);
                 node = e.node;
                 if node != SKIP {
                     break;
@@ -435,7 +444,8 @@ impl<'a> KdTree<'a> {
     }
 
     /// Descends from `node` to the leaf holding `p`; a point on a split
-    /// plane goes where the ray heads. `None` when the ray lies in the plane.
+    /// plane goes where the ray heads. `None` when the ray lies in the
+    /// plane; [`KdNode::FAULT`] when the descent is deeper than any tree.
     #[inline]
     pub(crate) fn locate(
         &self,
@@ -444,8 +454,8 @@ impl<'a> KdTree<'a> {
         d: Vec3,
         steps: &mut Steps,
     ) -> Option<KdNode> {
-        loop {
-            let nd = self.nodes[node as usize];
+        for _ in 0..=KD_MAX_DEPTH {
+            let nd = self.node(node);
             if nd.is_leaf() {
                 return Some(nd);
             }
@@ -454,17 +464,18 @@ impl<'a> KdTree<'a> {
             node = if p[a] < s || (p[a] == s && d[a] < 0.0) {
                 left
             } else if p[a] > s || d[a] > 0.0 {
-                left + 1
+                left.wrapping_add(1)
             } else {
                 return None;
             };
         }
+        Some(KdNode::FAULT)
     }
 
     /// Where the ray leaves leaf `nd`: the signed distance and the face.
     #[inline]
     pub(crate) fn leaf_exit(&self, r: &PreparedRay, nd: KdNode) -> (f32, usize) {
-        let rp = &self.ropes[nd.index() as usize];
+        let rp = self.rope(nd.index());
         let mut t_exit = f32::INFINITY;
         let mut face = 0;
         for a in 0..3 {
@@ -494,7 +505,7 @@ impl<'a> KdTree<'a> {
         face: usize,
         steps: &mut Steps,
     ) -> Result<Option<KdNode>, ()> {
-        let rp = &self.ropes[nd.index() as usize];
+        let rp = self.rope(nd.index());
         let next = rp.neighbor[face];
         if next == NO_NODE {
             return Ok(None);
@@ -520,7 +531,9 @@ impl<'a> KdTree<'a> {
 
     /// [`KdTree::rope_walk`] with its step across a face given: `next(leaf,
     /// t_exit, face, steps)` is the leaf beyond, as [`KdTree::rope_next`]
-    /// answers (guided ropes guess it first).
+    /// answers (guided ropes guess it first). A walk crosses each leaf at
+    /// most once: one that crosses more leaves than the tree has, or meets
+    /// a leaf outside the tree, stops with a fault.
     #[inline]
     pub(crate) fn rope_walk_by<V: LeafVisitor>(
         &self,
@@ -532,11 +545,11 @@ impl<'a> KdTree<'a> {
     ) -> RopeEnd {
         let r = *v.ray();
         let mut nd = first;
-        // A rope walk crosses each leaf at most once; the bound only guards
-        // against a corrupt arena.
-        for _ in 0..=self.leaves.len() {
+        for _ in 0..self.leaves.len() {
             steps.leaves += 1;
-            let refs = self.leaf_refs(nd);
+            let Some(refs) = self.leaf_refs(nd) else {
+                break;
+            };
             steps.empty += refs.is_empty() as u64;
             let (t_exit, face) = self.leaf_exit(&r, nd);
             if v.visit(&self.scene, refs, t_exit.min(t1)) {
@@ -551,10 +564,16 @@ impl<'a> KdTree<'a> {
                 Err(()) => return RopeEnd::Fallback,
             }
         }
-        RopeEnd::Fallback
+        steps.fault();
+        RopeEnd::Stopped
     }
 
-    fn walk_ropes<V: LeafVisitor>(&self, v: &mut V, steps: &mut Steps) -> bool {
+    fn walk_ropes<V: LeafVisitor>(
+        &self,
+        v: &mut V,
+        stack: &mut [KdStackItem],
+        steps: &mut Steps,
+    ) -> bool {
         let r = *v.ray();
         let Some((t0, t1)) = self.scene_segment(&r) else {
             return false;
@@ -566,7 +585,17 @@ impl<'a> KdTree<'a> {
         match end {
             RopeEnd::Stopped => true,
             RopeEnd::Exited => false,
-            RopeEnd::Fallback => self.walk_hierarchical(v, &mut NoRecord, steps),
+            RopeEnd::Fallback => self.walk_hierarchical(v, &mut NoRecord, stack, steps),
         }
     }
+}
+
+/// The traversal stack every kd trace takes: at least [`KD_STACK_LEN`].
+#[inline]
+fn check_stack(stack: &[KdStackItem]) {
+    assert!(
+        stack.len() >= KD_STACK_LEN,
+        "kd traversal stack of {} entries: needs KD_STACK_LEN = {KD_STACK_LEN}",
+        stack.len()
+    );
 }

@@ -4,6 +4,11 @@
 //! reference ranges are all numbered in depth-first preorder, left first.
 //! Checking that order proves, with no memory beyond a depth-bounded stack,
 //! that the nodes form one tree (no sharing, no cycle, nothing unreachable).
+//! Ropes are checked in a second pass, over the tree the first one proved:
+//! a rope's walk from the root then visits only vetted nodes and ends
+//! within the tree's depth. Both passes read through checked accessors, so
+//! no arena, however broken, makes them panic; they take time linear in
+//! the arena (times the depth, at most 60, for the ropes).
 
 use super::node::{KdNode, KD_MAX_DEPTH, NO_NODE};
 use super::KdTree;
@@ -42,10 +47,16 @@ impl<'a> KdTree<'a> {
     /// splits strictly inside their node's box, depth within the recorded
     /// depth, leaf records and reference ranges consecutive, every
     /// reference naming a non-degenerate primitive that touches its leaf's
-    /// box, leaf boxes equal to the ones implied by the splits, and every
-    /// rope leading to a node whose box covers that face from outside.
-    /// Returns the tree's figures. `cost_traversal` and `cost_intersection`
-    /// weight the SAH cost in the figures.
+    /// box, the references' digest as recorded, leaf boxes equal to the
+    /// ones implied by the splits, and every rope leading to a node whose
+    /// box covers that face from outside. Returns the tree's figures.
+    /// `cost_traversal` and `cost_intersection` weight the SAH cost in the
+    /// figures.
+    ///
+    /// Never panics, in time linear in the tree. Once it accepts a tree,
+    /// every traversal of it gives the hits of a clean build with the same
+    /// references (it cannot tell a crafted tree whose references are
+    /// consistent from a built one).
     pub fn validate_with_costs(
         &self,
         cost_traversal: f32,
@@ -62,6 +73,14 @@ impl<'a> KdTree<'a> {
             nodes: info.node_count,
             ..KdTreeStats::default()
         };
+        if self.nodes.len() != info.node_count as usize
+            || self.leaves.len() != info.leaf_count as usize
+            || self.ropes.len() != info.leaf_count as usize
+            || self.refs.len() != info.ref_count as usize
+            || info.depth > KD_MAX_DEPTH
+        {
+            return Err(corrupt("counts"));
+        }
         let mut stack = [(0u32, 0u32, Aabb::EMPTY); KD_MAX_DEPTH as usize + 2];
         stack[0] = (0, 0, root);
         let mut sp = 1;
@@ -69,6 +88,7 @@ impl<'a> KdTree<'a> {
         let mut next_leaf = 0u32;
         let mut next_ref = 0u32;
         let mut sah = 0.0f64;
+        let mut digest = 0u64;
         let prims = self.scene.prim_count();
         while sp > 0 {
             sp -= 1;
@@ -76,34 +96,35 @@ impl<'a> KdTree<'a> {
             if depth > info.depth {
                 return Err(corrupt("depth"));
             }
-            let nd = self.nodes[ni as usize];
+            let nd = *self.nodes.get(ni as usize).ok_or(corrupt("node order"))?;
             let rel_area = if root_area > 0.0 && root_area.is_finite() {
                 area64(&b) / root_area
             } else {
                 1.0
             };
             if nd.is_leaf() {
-                if nd.index() != next_leaf || nd.index() >= info.leaf_count {
+                if nd.index() != next_leaf {
                     return Err(corrupt("leaf order"));
                 }
                 next_leaf += 1;
-                let l = self.leaves[nd.index() as usize];
-                if l.first_ref != next_ref
-                    || (l.first_ref as u64 + l.ref_count as u64) > info.ref_count as u64
-                {
+                let l = *self
+                    .leaves
+                    .get(nd.index() as usize)
+                    .ok_or(corrupt("leaf order"))?;
+                if l.first_ref != next_ref {
                     return Err(corrupt("reference range"));
                 }
+                let refs = self.leaf_refs(nd).ok_or(corrupt("reference range"))?;
                 next_ref += l.ref_count;
                 st.leaves += 1;
                 st.empty_leaves += (l.ref_count == 0) as u32;
                 st.refs += l.ref_count;
                 st.depth = st.depth.max(depth);
                 sah += cost_intersection as f64 * l.ref_count as f64 * rel_area;
-                let rp = &self.ropes[nd.index() as usize];
-                if rp.bounds() != b {
+                if self.rope(nd.index()).bounds() != b {
                     return Err(corrupt("leaf box"));
                 }
-                for &p in &self.refs[l.first_ref as usize..(l.first_ref + l.ref_count) as usize] {
+                for &p in refs {
                     if p as usize >= prims {
                         return Err(corrupt("reference out of range"));
                     }
@@ -111,9 +132,7 @@ impl<'a> KdTree<'a> {
                         Some(pb) if touches(&pb, &b) => {}
                         _ => return Err(corrupt("reference outside its leaf")),
                     }
-                }
-                for face in 0..6 {
-                    self.check_rope(rp.neighbor[face], face, &b)?;
+                    digest = digest.wrapping_add(crate::rng::ref_mix(p));
                 }
                 continue;
             }
@@ -146,6 +165,17 @@ impl<'a> KdTree<'a> {
         if st.depth != info.depth {
             return Err(corrupt("depth"));
         }
+        if digest != info.ref_digest() {
+            return Err(corrupt("reference digest"));
+        }
+        // The nodes form one tree of the recorded depth, every leaf's box
+        // is the one its splits imply: the ropes can be walked.
+        for rp in self.ropes {
+            let b = rp.bounds();
+            for face in 0..6 {
+                self.check_rope(rp.neighbor[face], face, &b)?;
+            }
+        }
         st.sah_cost = sah as f32;
         Ok(st)
     }
@@ -159,7 +189,8 @@ impl<'a> KdTree<'a> {
     /// A rope of face `face` of leaf box `b` must be `NO_NODE` exactly when
     /// the face lies on the root's boundary, and otherwise name a node met
     /// on the way from the root towards the region just outside the face,
-    /// before any split cuts that face, and whose box covers the face.
+    /// before any split cuts that face, and whose box covers the face. Runs
+    /// on a tree the preorder pass proved, so the walk stays in it.
     fn check_rope(&self, rope: u32, face: usize, b: &Aabb) -> Result<(), Error> {
         let root = self.info.bounds();
         let axis = face / 2;
@@ -182,7 +213,7 @@ impl<'a> KdTree<'a> {
         }
         let mut node = 0u32;
         let mut nb = root;
-        loop {
+        for _ in 0..=KD_MAX_DEPTH {
             if node == rope {
                 let covers = (0..3).all(|i| {
                     if i == axis {
@@ -197,7 +228,7 @@ impl<'a> KdTree<'a> {
                     Err(corrupt("rope does not cover its face"))
                 };
             }
-            let nd: KdNode = self.nodes[node as usize];
+            let nd: KdNode = self.node(node);
             if nd.is_leaf() {
                 return Err(corrupt("rope not beside its face"));
             }
@@ -225,5 +256,6 @@ impl<'a> KdTree<'a> {
                 node = left;
             }
         }
+        Err(corrupt("rope deeper than the tree"))
     }
 }

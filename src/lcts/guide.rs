@@ -16,8 +16,8 @@
 
 use super::history::{HistoryRecord, KIND_LEAF, KIND_UNVISITED};
 use crate::geom::PreparedRay;
-use crate::kd::traverse::{Closest, LeafVisitor, NoRecord, RopeEnd, Steps, TraversalStack};
-use crate::kd::{KdNode, KdRopes, KdTree, NO_NODE};
+use crate::kd::traverse::{Closest, LeafVisitor, NoRecord, RopeEnd, Steps};
+use crate::kd::{KdNode, KdRopes, KdStackItem, KdTree, NO_NODE};
 use crate::{Hit, TraceStats, Vec3};
 
 /// Most boundary rays that guide a ray: all of a patch shaft's
@@ -159,7 +159,7 @@ impl Cursor {
     ) -> Option<u32> {
         let leaf = *paths.slots.get(self.next as usize)?;
         if leaf != END {
-            if holds(&tree.ropes[leaf as usize], p, d) {
+            if holds(tree.rope(leaf), p, d) {
                 self.next += 1;
                 return Some(leaf);
             }
@@ -176,7 +176,7 @@ impl Cursor {
             if cand == END || cand == tried {
                 continue;
             }
-            if holds(&tree.ropes[cand as usize], p, d) {
+            if holds(tree.rope(cand), p, d) {
                 self.next = (lo + i + 2) as u32;
                 return Some(cand);
             }
@@ -250,7 +250,7 @@ fn guess_first(
             continue;
         }
         tried[k] = leaf;
-        if holds(&tree.ropes[leaf as usize], p, d) {
+        if holds(tree.rope(leaf), p, d) {
             cur.next = from as u32 + 1;
             return Some(leaf);
         }
@@ -294,13 +294,13 @@ pub(crate) fn finish(
     tree: &KdTree,
     v: &mut Closest,
     done: bool,
-    stack: &mut TraversalStack,
+    stack: &mut [KdStackItem],
     mut steps: Steps,
     stats: &mut TraceStats,
 ) -> Hit {
-    if !done {
+    if !done && steps.faults == 0 {
         v.best = Hit::MISS;
-        tree.walk_hierarchical_on(v, &mut NoRecord, stack, &mut steps);
+        tree.walk_hierarchical(v, &mut NoRecord, stack, &mut steps);
     }
     steps.flush(stats);
     stats.prim_tests += v.tests;
@@ -324,14 +324,18 @@ pub(crate) fn walk_common(
     let mut last = None;
     for (node, run) in leaves {
         steps.leaves += 1;
-        let nd = tree.nodes[node as usize];
+        let nd = tree.node(node);
         last = Some(nd);
         if run {
             steps.empty += 1;
             continue;
         }
+        let Some(refs) = tree.leaf_refs(nd) else {
+            steps.fault();
+            return true;
+        };
         // The leaf's exit matters only once something is hit: test first.
-        v.visit(&tree.scene, tree.leaf_refs(nd), f32::NEG_INFINITY);
+        v.visit(&tree.scene, refs, f32::NEG_INFINITY);
         if v.best.is_hit() {
             let t_exit = tree.leaf_exit(&v.ray, nd).0.min(t1);
             if crate::kd::traverse::inside_leaf(v.best.t, t_exit) {
@@ -393,13 +397,13 @@ pub(crate) fn next(
     cur: &mut Cursor,
     steps: &mut Steps,
 ) -> Result<Option<u32>, ()> {
-    let rp = &tree.ropes[leaf as usize];
+    let rp = tree.rope(leaf);
     let rope = rp.neighbor[face];
     if rope == NO_NODE {
         return Ok(None);
     }
     // A rope that leads straight to a leaf needs no guess.
-    let target = tree.nodes[rope as usize];
+    let target = tree.node(rope);
     if target.is_leaf() {
         cur.follow(paths, target.index());
         return Ok(Some(target.index()));

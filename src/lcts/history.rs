@@ -3,8 +3,8 @@
 //! paper's traversal tree, flattened), leaves, and nodes pushed but never
 //! visited because the ray ended first.
 
-use crate::kd::traverse::{new_stack, Closest, Recorder, Steps, TraversalStack};
-use crate::kd::{Decision, KdTree};
+use crate::kd::traverse::{Closest, Recorder, Steps};
+use crate::kd::{Decision, KdStackItem, KdTree};
 use crate::{Hit, Ray, TraceStats};
 
 /// Kind of a [`HistoryRecord`] beyond the four decisions (0 to 3).
@@ -150,20 +150,27 @@ impl Recorder for History<'_> {
     }
 }
 
-/// Traces `ray` hierarchically from the root, recording its history into
-/// `h` (cleared first). The hit is exactly that of
-/// [`KdTree::intersect`] with hierarchical traversal.
-pub fn trace_recorded(tree: &KdTree, ray: &Ray, h: &mut History, stats: &mut TraceStats) {
-    trace_recorded_on(tree, ray, h, &mut new_stack(), stats, true);
+/// Traces `ray` hierarchically from the root on the caller's `stack`
+/// ([`crate::kd::KD_STACK_LEN`] entries), recording its history into `h`
+/// (cleared first). The hit is exactly that of [`KdTree::intersect`] with
+/// hierarchical traversal.
+pub fn trace_recorded(
+    tree: &KdTree,
+    ray: &Ray,
+    h: &mut History,
+    stack: &mut [KdStackItem],
+    stats: &mut TraceStats,
+) {
+    trace_recorded_on(tree, ray, h, stack, stats, true);
 }
 
-/// [`trace_recorded`] on a traversal stack the caller keeps across rays;
-/// subtree lengths only with `lengths` (the SLCTS does not use them).
+/// [`trace_recorded`], with subtree lengths only with `lengths` (the SLCTS
+/// does not use them).
 pub(crate) fn trace_recorded_on(
     tree: &KdTree,
     ray: &Ray,
     h: &mut History,
-    stack: &mut TraversalStack,
+    stack: &mut [KdStackItem],
     stats: &mut TraceStats,
     lengths: bool,
 ) {
@@ -176,7 +183,7 @@ pub(crate) fn trace_recorded_on(
     }
     let mut v = Closest::new(ray);
     let mut steps = Steps::default();
-    tree.walk_hierarchical_on(&mut v, h, stack, &mut steps);
+    tree.walk_hierarchical(&mut v, h, stack, &mut steps);
     steps.flush(stats);
     stats.prim_tests += v.tests;
     h.hit = v.best;

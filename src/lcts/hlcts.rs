@@ -21,8 +21,8 @@
 use super::guide::{self, Cursor, Paths, FROM_START, MAX_GUIDES, NO_PATH};
 use super::history::{fill_lengths, History, HistoryRecord, KIND_LEAF};
 use crate::geom::{Aabb, PreparedRay};
-use crate::kd::traverse::{new_stack, Closest, NoRecord, Steps, TraversalStack};
-use crate::kd::{KdNode, KdTree};
+use crate::kd::traverse::{Closest, NoRecord, Steps};
+use crate::kd::{KdNode, KdStackItem, KdTree};
 use crate::{Hit, Ray, TraceStats, Vec3};
 
 /// "No record": the ray never reached this node (it ended before it).
@@ -192,7 +192,7 @@ pub fn build<'b>(
     let n = b.out.len;
     b.out.leading_leaves = b.out.entries[..n]
         .iter()
-        .take_while(|e| tree.nodes[e.node as usize].is_leaf())
+        .take_while(|e| tree.node(e.node).is_leaf())
         .count();
     b.out.termination = termination_object(tree, &b.out, rays);
     b.out
@@ -227,7 +227,12 @@ impl Builder<'_, '_, '_> {
             self.emit(node, &bx, pos);
             return;
         }
-        let nd: KdNode = self.tree.nodes[node as usize];
+        let nd: KdNode = self.tree.node(node);
+        if nd.is_leaf() {
+            // Decisions recorded for a leaf: only a corrupt tree does that.
+            self.emit(node, &bx, pos);
+            return;
+        }
         let (a, s, left) = (nd.axis(), nd.split(), nd.index());
         let mut lb = bx;
         lb.max[a] = s;
@@ -258,8 +263,8 @@ impl Builder<'_, '_, '_> {
     }
 
     fn emit(&mut self, node: u32, bx: &Aabb, pos: [u32; MAX_RAYS]) {
-        let nd = self.tree.nodes[node as usize];
-        let empty = nd.is_leaf() && self.tree.leaf_refs(nd).is_empty();
+        let nd = self.tree.node(node);
+        let empty = nd.is_leaf() && self.tree.leaf_refs(nd).is_none_or(|r| r.is_empty());
         if empty && self.last_empty {
             // Unified into the run already in the sequence, which now ends
             // here: a ray that goes on by ropes leaves the run from this leaf.
@@ -352,8 +357,8 @@ fn termination_object(tree: &KdTree, h: &Hlcts, rays: &[Boundary]) -> Option<u32
         [e, c, ..] if e.flags & ENTRY_EMPTY_RUN != 0 && c.flags & ENTRY_EMPTY_RUN == 0 => c.node,
         _ => return None,
     };
-    let nd = tree.nodes[c as usize];
-    if !nd.is_leaf() || tree.leaf_refs(nd) != [global] {
+    let nd = tree.node(c);
+    if !nd.is_leaf() || tree.leaf_refs(nd) != Some(&[global]) {
         return None;
     }
     let ends_in_c = |r: &Boundary| {
@@ -370,23 +375,13 @@ fn termination_object(tree: &KdTree, h: &Hlcts, rays: &[Boundary]) -> Option<u32
 /// writes the ray's history (records of each entry's subtree, in order)
 /// and `starts[e]`, where entry `e`'s records begin ([`NONE`] where the ray
 /// ended before it). The hit is exactly the hierarchical traversal's.
+/// `stack`: [`crate::kd::KD_STACK_LEN`] entries.
 pub fn trace(
     tree: &KdTree,
     h: &Hlcts,
     ray: &Ray,
-    record: Option<(&mut History, &mut [u32])>,
-    stats: &mut TraceStats,
-) -> Hit {
-    trace_on(tree, h, ray, record, &mut new_stack(), stats)
-}
-
-/// [`trace`] on a traversal stack the caller keeps across rays.
-pub(crate) fn trace_on(
-    tree: &KdTree,
-    h: &Hlcts,
-    ray: &Ray,
     mut record: Option<(&mut History, &mut [u32])>,
-    stack: &mut TraversalStack,
+    stack: &mut [KdStackItem],
     stats: &mut TraceStats,
 ) -> Hit {
     stats.rays += 1;
@@ -418,7 +413,7 @@ pub(crate) fn trace_on(
                 steps.empty += 1;
                 if let Some((hist, starts)) = record.as_mut() {
                     starts[e] = hist.len as u32;
-                    let leaf = tree.nodes[entry.node as usize].index();
+                    let leaf = tree.node(entry.node).index();
                     crate::kd::traverse::Recorder::leaf(&mut **hist, entry.node, leaf);
                 }
                 continue;
@@ -498,26 +493,15 @@ fn terminated(tree: &KdTree, h: &Hlcts, v: &mut Closest, steps: &mut Steps) -> b
 /// ([`Hlcts::paths`] of the boundary rays, asked first at `nearest`, or
 /// [`Paths::none`]). A cut without leading leaves starts the ray at its
 /// first leaf, guessed from the paths or located from the first entry.
-/// The hit is exactly the hierarchical traversal's.
+/// The hit is exactly the hierarchical traversal's. `stack` serves a ray
+/// that must be redone hierarchically.
 pub fn trace_guided(
     tree: &KdTree,
     h: &Hlcts,
     paths: &Paths,
     nearest: usize,
     ray: &Ray,
-    stats: &mut TraceStats,
-) -> Hit {
-    trace_guided_on(tree, h, paths, nearest, ray, &mut new_stack(), stats)
-}
-
-/// [`trace_guided`] on a traversal stack the caller keeps across rays.
-pub(crate) fn trace_guided_on(
-    tree: &KdTree,
-    h: &Hlcts,
-    paths: &Paths,
-    nearest: usize,
-    ray: &Ray,
-    stack: &mut TraversalStack,
+    stack: &mut [KdStackItem],
     stats: &mut TraceStats,
 ) -> Hit {
     stats.rays += 1;

@@ -21,9 +21,8 @@
 use super::history::{trace_recorded_on, History, HistoryRecord};
 use super::hlcts::{self, Boundary, HlctsEntry, Source, MAX_RAYS};
 use super::slcts;
-use crate::geom::{Camera, Hit, INVALID_ID};
-use crate::kd::traverse::{new_stack, TraversalStack};
-use crate::kd::{KdTree, Traversal};
+use crate::geom::{Camera, Hit};
+use crate::kd::{KdStackItem, KdTree, Traversal, KD_STACK_LEN};
 use crate::{Error, TraceStats};
 
 /// How an image is cast.
@@ -70,6 +69,8 @@ pub struct ImageRequirements {
     pub starts: usize,
     /// [`HlctsEntry`] slots.
     pub hlcts: usize,
+    /// [`KdStackItem`] slots: the traversal stack ([`KD_STACK_LEN`]).
+    pub stack: usize,
 }
 
 /// Caller memory for [`cast_image`].
@@ -84,6 +85,8 @@ pub struct ImageScratch<'b> {
     pub starts: &'b mut [u32],
     /// HLCTS schemes: one cut per level of bisection.
     pub hlcts: &'b mut [HlctsEntry],
+    /// The traversal stack, [`KD_STACK_LEN`] entries.
+    pub stack: &'b mut [KdStackItem],
 }
 
 /// What a cast did, beyond the per-ray counters.
@@ -144,6 +147,7 @@ pub fn image_requirements(
             corners: 0,
             starts: slots * per_cut,
             hlcts: (levels + 1) * per_cut,
+            stack: KD_STACK_LEN,
         };
     }
     let cols = match scheme {
@@ -165,6 +169,7 @@ pub fn image_requirements(
         corners: rows * cols,
         starts: 0,
         hlcts: 0,
+        stack: KD_STACK_LEN,
     }
 }
 
@@ -206,65 +211,64 @@ fn bisection_levels(width: u32, height: u32, scheme: Scheme) -> Option<usize> {
     }
 }
 
-fn global_prim(tree: &KdTree, h: &Hit) -> u32 {
-    let s = &tree.scene;
-    match h.geom_id {
-        crate::geom::GEOM_TRIANGLES => h.prim_id,
-        crate::geom::GEOM_SPHERES => s.triangles.len() as u32 + h.prim_id,
-        crate::geom::GEOM_CONES => (s.triangles.len() + s.spheres.len()) as u32 + h.prim_id,
-        _ => INVALID_ID,
-    }
-}
-
-/// Casts the camera's image. `t_out[y * w + x]` receives the hit distance
-/// (infinity for a miss) and `prim_out` the global primitive index
-/// (triangles, then spheres, then cones; `u32::MAX` for a miss). Both must
-/// hold `width * height` entries; the scratch must meet [`image_requirements`]
-/// for some history capacity (the capacity is the records per corner row
-/// divided by the corner columns).
+/// Casts the camera's image: `hits[y * width + x]` receives the closest
+/// hit of pixel (x, y), exactly what hierarchical traversal gives it.
+/// `hits` holds `width * height` entries; the scratch meets
+/// [`image_requirements`] for some history capacity (the capacity is the
+/// records per corner row divided by the corner columns).
 pub fn cast_image(
     tree: &KdTree,
     camera: &Camera,
     scheme: Scheme,
     scratch: ImageScratch,
-    t_out: &mut [f32],
-    prim_out: &mut [u32],
+    hits: &mut [Hit],
+) -> Result<CastStats, Error> {
+    let pixels = camera.width as usize * camera.height as usize;
+    if hits.len() < pixels {
+        return Err(Error::SliceTooSmall {
+            slice: "hits",
+            needed: pixels,
+            got: hits.len(),
+        });
+    }
+    let w = camera.width as usize;
+    cast_image_with(tree, camera, scheme, scratch, |x, y, h| {
+        hits[y as usize * w + x as usize] = *h;
+    })
+}
+
+/// [`cast_image`], handing each pixel's hit to `put(x, y, hit)` (every
+/// pixel exactly once) instead of storing it.
+pub fn cast_image_with(
+    tree: &KdTree,
+    camera: &Camera,
+    scheme: Scheme,
+    scratch: ImageScratch,
+    mut put: impl FnMut(u32, u32, &Hit),
 ) -> Result<CastStats, Error> {
     let (w, h) = (camera.width, camera.height);
-    let pixels = w as usize * h as usize;
     if w == 0 || h == 0 {
         return Err(Error::InvalidParameter {
             name: "camera resolution",
         });
     }
-    if t_out.len() < pixels {
+    if scratch.stack.len() < KD_STACK_LEN {
         return Err(Error::SliceTooSmall {
-            slice: "t_out",
-            needed: pixels,
-            got: t_out.len(),
-        });
-    }
-    if prim_out.len() < pixels {
-        return Err(Error::SliceTooSmall {
-            slice: "prim_out",
-            needed: pixels,
-            got: prim_out.len(),
+            slice: "stack",
+            needed: KD_STACK_LEN,
+            got: scratch.stack.len(),
         });
     }
     let (f, r, u) = camera.basis();
     let ray = |x: u32, y: u32| camera.ray_in(f, r, u, x as f32 + 0.5, y as f32 + 0.5);
     let mut st = CastStats::default();
-    let mut stack = new_stack();
-    let mut put = |x: u32, y: u32, hit: &Hit| {
-        let i = y as usize * w as usize + x as usize;
-        t_out[i] = hit.t;
-        prim_out[i] = global_prim(tree, hit);
-    };
+    let stack = &mut *scratch.stack;
     match scheme {
         Scheme::Hierarchical => {
             for y in 0..h {
                 for x in 0..w {
-                    let hit = tree.intersect_on(&ray(x, y), &mut stack, &mut st.trace);
+                    let hit =
+                        tree.intersect(&ray(x, y), Traversal::Hierarchical, stack, &mut st.trace);
                     put(x, y, &hit);
                 }
             }
@@ -272,13 +276,13 @@ pub fn cast_image(
         Scheme::Ropes => {
             for y in 0..h {
                 for x in 0..w {
-                    let hit = tree.intersect(&ray(x, y), Traversal::Ropes, &mut st.trace);
+                    let hit = tree.intersect(&ray(x, y), Traversal::Ropes, stack, &mut st.trace);
                     put(x, y, &hit);
                 }
             }
         }
         Scheme::Hlcts1d | Scheme::Hlcts2d => {
-            return cast_bisection(tree, camera, scheme, scratch, t_out, prim_out);
+            return cast_bisection(tree, camera, scheme, scratch, &mut put);
         }
         Scheme::Slcts1d { n } | Scheme::Slcts2d { n, .. } => {
             if n < 2 {
@@ -337,14 +341,7 @@ pub fn cast_image(
                     let xi = corners(w, n, i);
                     let buf = &mut bottom[i * cap..(i + 1) * cap];
                     let mut hist = History::new(buf);
-                    trace_recorded_on(
-                        tree,
-                        &ray(xi, yj),
-                        &mut hist,
-                        &mut stack,
-                        &mut st.trace,
-                        false,
-                    );
+                    trace_recorded_on(tree, &ray(xi, yj), &mut hist, stack, &mut st.trace, false);
                     put(xi, yj, &hist.hit);
                     hist_lens_bottom.info[i] = CornerInfo {
                         len: hist.len as u32,
@@ -366,13 +363,13 @@ pub fn cast_image(
                         let (x0, x1) = (corners(w, n, i), corners(w, n, i + 1));
                         for x in x0 + 1..x1 {
                             let nearest = far_half(x, x0, x1);
-                            let hit = slcts::trace_on(
+                            let hit = slcts::trace(
                                 tree,
                                 &seq,
                                 &paths,
                                 nearest,
                                 &ray(x, yj),
-                                &mut stack,
+                                stack,
                                 &mut st.trace,
                             );
                             put(x, yj, &hit);
@@ -409,13 +406,13 @@ pub fn cast_image(
                                 }
                                 // Corners 0 and 1 on the top row, 2 and 3 below.
                                 let nearest = far_half(x, x0, x1) + 2 * far_half(y, y_prev, yj);
-                                let hit = slcts::trace_on(
+                                let hit = slcts::trace(
                                     tree,
                                     &seq,
                                     &paths,
                                     nearest,
                                     &ray(x, y),
-                                    &mut stack,
+                                    stack,
                                     &mut st.trace,
                                 );
                                 put(x, y, &hit);
@@ -504,7 +501,7 @@ struct Bisection<'t, 'o, F: FnMut(u32, u32, &Hit)> {
     paths: &'o mut [u32],
     st: CastStats,
     /// One traversal stack for every ray of the cast.
-    stack: TraversalStack,
+    stack: &'o mut [KdStackItem],
 }
 
 impl<F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, F> {
@@ -528,12 +525,12 @@ impl<F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, F> {
         let (rec, records) = free.records.split_at_mut(self.cap);
         let (starts, rest_starts) = free.starts.split_at_mut(self.per_cut);
         let mut h = History::new(rec);
-        let hit = hlcts::trace_on(
+        let hit = hlcts::trace(
             self.tree,
             cut,
             &self.ray(x, y),
             Some((&mut h, &mut starts[..cut.len.max(1)])),
-            &mut self.stack,
+            self.stack,
             &mut self.st.trace,
         );
         (self.put)(x, y, &hit);
@@ -602,13 +599,13 @@ impl<F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, F> {
                 let paths = cut.paths(&hs, &mut *buf);
                 for x in x0 + 1..x1 {
                     let nearest = far_half(x, x0, x1);
-                    let hit = hlcts::trace_guided_on(
+                    let hit = hlcts::trace_guided(
                         self.tree,
                         &cut,
                         &paths,
                         nearest,
                         &self.ray(x, y0),
-                        &mut self.stack,
+                        self.stack,
                         &mut self.st.trace,
                     );
                     (self.put)(x, y0, &hit);
@@ -644,13 +641,13 @@ impl<F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, F> {
                     if !corner(x, y) {
                         // Corners 0 and 1 on the top row, 2 and 3 below.
                         let nearest = far_half(x, x0, x1) + 2 * far_half(y, y0, y1);
-                        let hit = hlcts::trace_guided_on(
+                        let hit = hlcts::trace_guided(
                             self.tree,
                             &cut,
                             &paths,
                             nearest,
                             &self.ray(x, y),
-                            &mut self.stack,
+                            self.stack,
                             &mut self.st.trace,
                         );
                         (self.put)(x, y, &hit);
@@ -666,7 +663,7 @@ impl<F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, F> {
         // its new edge, the second c and d on its own. A new corner on an old
         // one's pixel (a half one pixel wide, a rectangle one pixel high) is
         // that corner, not traced again.
-        let split_x = can_x && (!can_y || depth % 2 == 0);
+        let split_x = can_x && (!can_y || depth.is_multiple_of(2));
         let (xm, ym) = ((x0 + x1) / 2, (y0 + y1) / 2);
         let (pa, pb, pc, pd, halves) = if split_x {
             (
@@ -758,8 +755,7 @@ fn cast_bisection(
     camera: &Camera,
     scheme: Scheme,
     scratch: ImageScratch,
-    t_out: &mut [f32],
-    prim_out: &mut [u32],
+    put: &mut impl FnMut(u32, u32, &Hit),
 ) -> Result<CastStats, Error> {
     let (w, h) = (camera.width, camera.height);
     let levels = bisection_levels(w, h, scheme).unwrap_or(1);
@@ -788,11 +784,6 @@ fn cast_bisection(
             got: scratch.hlcts.len(),
         });
     }
-    let mut put = |x: u32, y: u32, hit: &Hit| {
-        let i = y as usize * w as usize + x as usize;
-        t_out[i] = hit.t;
-        prim_out[i] = global_prim(tree, hit);
-    };
     let mut b = Bisection {
         tree,
         camera,
@@ -800,10 +791,10 @@ fn cast_bisection(
         cap,
         per_cut,
         leaf_pixels: LEAF_PIXELS,
-        put: &mut put,
+        put,
         paths: scratch.entries,
         st: CastStats::default(),
-        stack: new_stack(),
+        stack: scratch.stack,
     };
     let root = [hlcts::root_entry(tree)];
     let rows = if scheme == Scheme::Hlcts1d { h } else { 1 };
@@ -834,7 +825,7 @@ fn cast_bisection(
                 tree,
                 &b.ray(x, yy),
                 &mut hist,
-                &mut b.stack,
+                b.stack,
                 &mut b.st.trace,
                 true,
             );

@@ -22,10 +22,12 @@ pub mod guide;
 pub mod history;
 pub mod hlcts;
 pub mod image;
+pub mod layout;
 pub mod patch;
 pub mod slcts;
 
 pub use history::{History, HistoryRecord};
 pub use image::{
-    cast_image, image_requirements, CastStats, CornerInfo, ImageRequirements, ImageScratch, Scheme,
+    cast_image, cast_image_with, image_requirements, CastStats, CornerInfo, ImageRequirements,
+    ImageScratch, Scheme,
 };

@@ -9,8 +9,8 @@
 use super::history::{trace_recorded_on, History, HistoryRecord};
 use super::hlcts::{self, Boundary, HlctsEntry, Source, MAX_RAYS};
 use crate::geom::{Hit, Ray, Vec3};
-use crate::kd::traverse::new_stack;
-use crate::kd::KdTree;
+use crate::kd::{KdStackItem, KdTree, KD_STACK_LEN};
+use crate::limits::MAX_PATCH_SAMPLES_PER_SIDE;
 use crate::{Error, TraceStats};
 
 /// Most vertices of a patch (a convex polygon): 4, so that the vertex pairs
@@ -26,6 +26,8 @@ pub struct PatchScratch<'b> {
     /// The boundary segments' paths past the cut's leading leaves: as many
     /// `u32` as `records` has records (fewer only guides less).
     pub paths: &'b mut [u32],
+    /// The traversal stack, [`KD_STACK_LEN`] entries.
+    pub stack: &'b mut [KdStackItem],
 }
 
 /// What a visibility query found and did.
@@ -109,6 +111,18 @@ pub fn patch_visibility(
     if !(0.0..0.5).contains(&eps) {
         return Err(Error::InvalidParameter { name: "eps" });
     }
+    if n == 0 || n > MAX_PATCH_SAMPLES_PER_SIDE {
+        return Err(Error::InvalidParameter {
+            name: "samples_per_side",
+        });
+    }
+    if scratch.stack.len() < KD_STACK_LEN {
+        return Err(Error::SliceTooSmall {
+            slice: "stack",
+            needed: KD_STACK_LEN,
+            got: scratch.stack.len(),
+        });
+    }
     let k = a.len() * b.len();
     let cap = scratch.records.len() / k;
     if cap == 0 {
@@ -119,7 +133,7 @@ pub fn patch_visibility(
         });
     }
     let mut out = PatchVisibility::default();
-    let mut stack = new_stack();
+    let stack = scratch.stack;
     // The boundary segments, traced from the root with their histories.
     let mut lens = [(0usize, false, Hit::MISS); MAX_RAYS];
     let mut rays = [Ray::new(Vec3::ZERO, Vec3::X, 0.0, 1.0); MAX_RAYS];
@@ -127,7 +141,7 @@ pub fn patch_visibility(
         let (ia, ib) = (j / b.len(), j % b.len());
         rays[j] = segment(a[ia], b[ib], eps);
         let mut h = History::new(slot);
-        trace_recorded_on(tree, &rays[j], &mut h, &mut stack, &mut out.boundary, true);
+        trace_recorded_on(tree, &rays[j], &mut h, stack, &mut out.boundary, true);
         lens[j] = (h.len, h.overflow, h.hit);
     }
     let records: &[HistoryRecord] = scratch.records;
@@ -164,13 +178,13 @@ pub fn patch_visibility(
             let q = patch_point(b, ub, vb);
             let nearest =
                 nearest_vertex(a.len(), ua, va) * b.len() + nearest_vertex(b.len(), ub, vb);
-            let hit = hlcts::trace_guided_on(
+            let hit = hlcts::trace_guided(
                 tree,
                 &cut,
                 &paths,
                 nearest,
                 &segment(p, q, eps),
-                &mut stack,
+                stack,
                 &mut out.trace,
             );
             out.samples += 1;

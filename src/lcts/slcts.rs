@@ -14,8 +14,8 @@
 use super::guide::{self, Cursor, Paths, FROM_START, MAX_GUIDES};
 use super::history::{HistoryRecord, KIND_LEAF};
 use crate::geom::PreparedRay;
-use crate::kd::traverse::{new_stack, Closest, Steps, TraversalStack};
-use crate::kd::KdTree;
+use crate::kd::traverse::{Closest, Steps};
+use crate::kd::{KdStackItem, KdTree};
 use crate::{Hit, Ray, TraceStats, Vec3};
 
 /// Marks a sequence entry standing for a run of empty leaves (unification
@@ -82,7 +82,7 @@ impl EntryNode {
 /// leaf is an interior node whose next record is its first child).
 pub fn entry_node(tree: &KdTree, histories: &[Option<&[HistoryRecord]>]) -> Option<EntryNode> {
     let first = (*histories.first()?)?;
-    if histories.iter().any(|h| h.map_or(true, |h| h.is_empty())) {
+    if histories.iter().any(|h| h.is_none_or(|h| h.is_empty())) {
         return None;
     }
     let mut e = EntryNode {
@@ -102,7 +102,7 @@ pub fn entry_node(tree: &KdTree, histories: &[Option<&[HistoryRecord]>]) -> Opti
         {
             return Some(e);
         }
-        let nd = tree.nodes[r.node as usize];
+        let nd = tree.node(r.node);
         let (a, split) = (nd.axis(), nd.split());
         if next == nd.index() {
             e.hi[a] = split;
@@ -159,7 +159,7 @@ pub fn build<'b>(
         if !same {
             break;
         }
-        let empty = tree.leaves[rec.leaf_index() as usize].ref_count == 0;
+        let empty = tree.leaf_is_empty(rec.leaf_index());
         let unified = empty && last_empty && s.len > 0;
         if !unified && s.len == s.entries.len() {
             break;
@@ -224,7 +224,7 @@ fn termination_object(
     if histories.iter().any(|h| h.and_then(last_leaf) != Some(c)) {
         return None;
     }
-    let refs = tree.leaf_refs(tree.nodes[c as usize]);
+    let refs = tree.leaf_refs(tree.node(c))?;
     (refs == [global]).then_some(global)
 }
 
@@ -232,27 +232,15 @@ fn termination_object(
 /// hierarchical traversal would answer: the termination object when there
 /// is one, else the sequence's leaves, then ropes from the last of them,
 /// guided by `paths` ([`Slcts::paths`], or [`Paths::none`]) asked first at
-/// path `nearest`.
+/// path `nearest`. `stack` ([`crate::kd::KD_STACK_LEN`] entries) serves a
+/// ray that must be redone hierarchically.
 pub fn trace(
     tree: &KdTree,
     s: &Slcts,
     paths: &Paths,
     nearest: usize,
     ray: &Ray,
-    stats: &mut TraceStats,
-) -> Hit {
-    trace_on(tree, s, paths, nearest, ray, &mut new_stack(), stats)
-}
-
-/// [`trace`] on a traversal stack the caller keeps across rays (used only
-/// when a ray must be redone hierarchically).
-pub(crate) fn trace_on(
-    tree: &KdTree,
-    s: &Slcts,
-    paths: &Paths,
-    nearest: usize,
-    ray: &Ray,
-    stack: &mut TraversalStack,
+    stack: &mut [KdStackItem],
     stats: &mut TraceStats,
 ) -> Hit {
     stats.rays += 1;
@@ -270,7 +258,7 @@ pub(crate) fn trace_on(
                 .iter()
                 .find(|&&e| e & EMPTY_RUN == 0)
                 .is_some_and(|&e| {
-                    let exit = tree.leaf_exit(&v.ray, tree.nodes[e as usize]).0;
+                    let exit = tree.leaf_exit(&v.ray, tree.node(e)).0;
                     crate::kd::traverse::inside_leaf(h.t, exit)
                 })
         };

@@ -188,12 +188,16 @@ fn refit(
 }
 
 impl ProjHierarchy<'_> {
-    /// [`Bvh::validate`] of the 3D side (`min_children` for R-trees), and
-    /// every node's rectangle is the union of its entries' rectangles, each
-    /// primitive's that of its box on the plane.
-    pub fn validate(&self, min_children: Option<u32>) -> Result<bvh::BvhTreeStats, Error> {
+    /// [`Bvh::validate`] of the 3D side (`min_children` for R-trees) on
+    /// the caller's `stack`, and every node's rectangle is the union of its
+    /// entries' rectangles, each primitive's that of its box on the plane.
+    /// Never panics; linear time.
+    pub fn validate(
+        &self,
+        min_children: Option<u32>,
+        stack: &mut [bvh::BvhStackItem],
+    ) -> Result<bvh::BvhTreeStats, Error> {
         let corrupt = |what| Err(Error::Corrupt { what });
-        let s = self.bvh.validate(min_children)?;
         let scene = &self.bvh.scene;
         if self.prim_rects.len() < scene.prim_count() || self.rects.len() < self.bvh.nodes.len() {
             return corrupt("rectangle slices");
@@ -206,45 +210,26 @@ impl ProjHierarchy<'_> {
                 return corrupt("primitive rectangle differs from its projection");
             }
         }
-        let check = |i: usize| {
-            let nd = self.bvh.nodes[i];
+        let mismatch = Error::Corrupt {
+            what: "node rectangle differs from the union of its entries'",
+        };
+        self.bvh.validate_with(min_children, stack, |i, nd| {
             let mut r = Rect::EMPTY;
             if nd.is_leaf() {
-                for &p in &self.bvh.refs[nd.first as usize..(nd.first + nd.len()) as usize] {
-                    r = r.union(&self.prim_rects[p as usize]);
+                for &p in self.bvh.leaf_refs(nd).ok_or(mismatch)? {
+                    r = r.union(self.prim_rects.get(p as usize).ok_or(mismatch)?);
                 }
             } else {
-                for c in nd.first..nd.first + nd.len() {
+                for c in self.bvh.children(nd).ok_or(mismatch)? {
                     r = r.union(&self.rects[c as usize]);
                 }
             }
-            r == self.rects[i] || (r.is_empty() && self.rects[i].is_empty())
-        };
-        // The 3D check above proved the structure; binary hierarchies use
-        // nodes 0..node_count, R-trees are shallow enough for a stack.
-        if self.bvh.info.max_children == 2 {
-            if !(0..self.bvh.info.node_count as usize).all(check) {
-                return corrupt("node rectangle differs from the union of its entries'");
+            let own = &self.rects[i as usize];
+            if r == *own || (r.is_empty() && own.is_empty()) {
+                Ok(())
+            } else {
+                Err(mismatch)
             }
-            return Ok(s);
-        }
-        let mut stack = [0u32; 2048];
-        stack[0] = self.bvh.info.root;
-        let mut sp = 1;
-        while sp > 0 {
-            sp -= 1;
-            let i = stack[sp] as usize;
-            if !check(i) {
-                return corrupt("node rectangle differs from the union of its entries'");
-            }
-            let nd = self.bvh.nodes[i];
-            if !nd.is_leaf() {
-                for c in nd.first..nd.first + nd.len() {
-                    stack[sp] = c;
-                    sp += 1;
-                }
-            }
-        }
-        Ok(s)
+        })
     }
 }

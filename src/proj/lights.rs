@@ -56,7 +56,7 @@ impl LightPlanes {
                         (2 * a, bounds.min[a] - l[a]),
                         (2 * a + 1, l[a] - bounds.max[a]),
                     ] {
-                        if gap > 0.0 && best.map_or(true, |(_, g)| gap > g) {
+                        if gap > 0.0 && best.is_none_or(|(_, g)| gap > g) {
                             best = Some((face, gap));
                         }
                     }

@@ -21,13 +21,14 @@
 //! are tested with the ray itself.
 
 mod build;
+pub mod layout;
 pub mod lights;
 mod plane;
 mod traverse;
 
 pub use build::{build_proj, proj_requirements, ProjRequirements, ProjScratch, ProjStorage};
 pub use plane::{cube_face_of, cube_faces, ProjPlane, Rect, UNBOUNDED};
-pub use traverse::{ProjScheme, ProjStats, Projected, RECT_COST};
+pub use traverse::{ProjScheme, Projected, RECT_COST};
 
 use crate::bvh::{Builder, Bvh, RTreeParams};
 
@@ -54,14 +55,59 @@ pub enum Criteria {
 /// A projection hierarchy: a hierarchy whose nodes have 3D boxes (in
 /// `bvh.nodes`) and rectangles on `plane` (`rects`, same indices), and the
 /// rectangle of every primitive (`prim_rects`, by global primitive index).
+/// Made only by [`build_proj`] and [`ProjHierarchy::from_parts`].
 #[derive(Clone, Copy)]
 pub struct ProjHierarchy<'a> {
     /// Structure, 3D boxes, references, scene.
-    pub bvh: Bvh<'a>,
+    pub(crate) bvh: Bvh<'a>,
     /// Rectangle of each node.
-    pub rects: &'a [Rect],
+    pub(crate) rects: &'a [Rect],
     /// Rectangle of each primitive (empty when it projects to nothing).
-    pub prim_rects: &'a [Rect],
+    pub(crate) prim_rects: &'a [Rect],
     /// The plane the rectangles lie on.
-    pub plane: ProjPlane,
+    pub(crate) plane: ProjPlane,
+}
+
+impl<'a> ProjHierarchy<'a> {
+    /// Reassembles a projection hierarchy from parts read back from memory
+    /// with O(1) checks: a rectangle per node slot and per primitive.
+    /// [`ProjHierarchy::validate`] checks the rest on untrusted memory.
+    pub fn from_parts(
+        bvh: Bvh<'a>,
+        rects: &'a [Rect],
+        prim_rects: &'a [Rect],
+        plane: ProjPlane,
+    ) -> Result<ProjHierarchy<'a>, crate::Error> {
+        if rects.len() < bvh.nodes.len() || prim_rects.len() < bvh.scene.prim_count() {
+            return Err(crate::Error::Corrupt {
+                what: "rectangle slices",
+            });
+        }
+        Ok(ProjHierarchy {
+            bvh,
+            rects,
+            prim_rects,
+            plane,
+        })
+    }
+
+    /// The 3D side: structure, boxes, references, scene.
+    pub fn bvh(&self) -> &Bvh<'a> {
+        &self.bvh
+    }
+
+    /// The plane the rectangles lie on.
+    pub fn plane(&self) -> &ProjPlane {
+        &self.plane
+    }
+
+    /// The rectangles of the node slots and of the primitives.
+    pub fn rects(&self) -> (&'a [Rect], &'a [Rect]) {
+        (self.rects, self.prim_rects)
+    }
+
+    /// Entries of traversal stack every trace needs.
+    pub fn stack_len(&self) -> usize {
+        self.bvh.stack_len()
+    }
 }

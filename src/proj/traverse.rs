@@ -2,11 +2,11 @@
 //! intersection schemes, closest hit and any hit. The scheme is chosen
 //! once per ray; each has its own loop.
 
-use super::{ProjHierarchy, Rect};
-use crate::bvh::traverse::{box_test, push_nearest_last};
-use crate::bvh::{BvhNode, BvhStackItem, BvhStats};
+use super::ProjHierarchy;
+use crate::bvh::traverse::{box_test, EntryTest};
+use crate::bvh::{BvhNode, BvhStackItem};
 use crate::geom::{Hit, PreparedRay, Ray};
-use crate::kd::traverse::tie_wins;
+use crate::TraceStats;
 
 /// How a ray is tested against the hierarchy's nodes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -22,26 +22,6 @@ pub enum ProjScheme {
 /// The thesis' units of a point-in-rectangle test.
 pub const RECT_COST: u64 = 4;
 
-/// A projection traversal's counters: those of [`BvhStats`] (hierarchy
-/// objects tested, counting 2D and 3D tests, and their cost; primitives)
-/// and how many of the tests were 2D.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct ProjStats {
-    /// Rays, nodes, primitive tests and the thesis' costs.
-    pub bvh: BvhStats,
-    /// Point-in-rectangle tests among `bvh.box_tests` (a combination test
-    /// that goes on to the 3D box counts once there, with both costs).
-    pub rect_tests: u64,
-}
-
-impl ProjStats {
-    /// Adds another call's counts.
-    pub fn add(&mut self, o: &ProjStats) {
-        self.bvh.add(&o.bvh);
-        self.rect_tests += o.rect_tests;
-    }
-}
-
 const TWO_D: u8 = 0;
 const THREE_D: u8 = 1;
 const COMBINED: u8 = 2;
@@ -55,103 +35,69 @@ pub struct Projected {
     pub t_per_depth: f32,
 }
 
-impl ProjHierarchy<'_> {
-    /// One entry test of scheme `S`: the lower bound of t inside it, or None.
+/// Entry tests of scheme `S` on a projection hierarchy: its rectangles,
+/// its 3D boxes, or both.
+struct ProjTest<'h, 'r, const S: u8> {
+    h: &'h ProjHierarchy<'h>,
+    r: &'r PreparedRay,
+    q: &'r Projected,
+}
+
+impl<const S: u8> ProjTest<'_, '_, S> {
+    /// One entry test against `rect` and `node`.
     #[inline(always)]
-    fn test<const S: u8>(
-        rect: &Rect,
+    fn test(
+        &self,
+        rect: &super::Rect,
         node: &BvhNode,
-        r: &PreparedRay,
-        q: &Projected,
         t_max: f32,
-        st: &mut ProjStats,
+        st: &mut TraceStats,
     ) -> Option<f32> {
-        st.bvh.box_tests += 1;
+        st.box_tests += 1;
         if S != THREE_D {
             st.rect_tests += 1;
-            st.bvh.box_cost += RECT_COST;
-            if !rect.contains(q.point) {
+            st.box_cost += RECT_COST;
+            if !rect.contains(self.q.point) {
                 return None;
             }
             if S == TWO_D {
-                let t = (rect.near * q.t_per_depth).max(r.t_min);
+                let t = (rect.near * self.q.t_per_depth).max(self.r.t_min);
                 return (t <= t_max).then_some(t);
             }
         }
-        let (t, cost) = box_test(node, r, t_max);
-        st.bvh.box_cost += cost;
+        let (t, cost) = box_test(node, self.r, t_max);
+        st.box_cost += cost;
         t
     }
+}
 
-    /// Primitive `p`'s entry in a leaf of several: its rectangle and box.
+impl<const S: u8> EntryTest for ProjTest<'_, '_, S> {
     #[inline(always)]
-    fn entry<const S: u8>(
-        &self,
-        p: u32,
-        r: &PreparedRay,
-        q: &Projected,
-        t_max: f32,
-        st: &mut ProjStats,
-    ) -> bool {
-        let b = self.bvh.scene.prim_box(p as usize);
-        let node = BvhNode::leaf(&b, 0, 0);
-        Self::test::<S>(&self.prim_rects[p as usize], &node, r, q, t_max, st).is_some()
+    fn node(&self, i: u32, node: &BvhNode, t_max: f32, st: &mut TraceStats) -> Option<f32> {
+        self.test(self.h.rects.get(i as usize)?, node, t_max, st)
     }
+    #[inline(always)]
+    fn entry(&self, p: u32, t_max: f32, st: &mut TraceStats) -> bool {
+        let b = self.h.bvh.scene.prim_box(p as usize);
+        let node = BvhNode::leaf(&b, 0, 0);
+        self.h
+            .prim_rects
+            .get(p as usize)
+            .and_then(|rect| self.test(rect, &node, t_max, st))
+            .is_some()
+    }
+}
 
+impl ProjHierarchy<'_> {
     fn closest<const S: u8>(
         &self,
         r: &PreparedRay,
         q: &Projected,
         stack: &mut [BvhStackItem],
-        st: &mut ProjStats,
+        st: &mut TraceStats,
     ) -> Hit {
-        let mut best = Hit::MISS;
-        let limit = |best: &Hit| if best.is_hit() { best.t } else { r.t_max };
-        let root = self.bvh.info.root as usize;
-        let Some(t) = Self::test::<S>(&self.rects[root], &self.bvh.nodes[root], r, q, r.t_max, st)
-        else {
-            return best;
-        };
-        stack[0] = BvhStackItem {
-            node: root as u32,
-            t,
-        };
-        let mut sp = 1;
-        while sp > 0 {
-            sp -= 1;
-            let item = stack[sp];
-            if item.t > limit(&best) {
-                continue;
-            }
-            let n = self.bvh.nodes[item.node as usize];
-            st.bvh.trace.traversal_steps += 1;
-            if n.is_leaf() {
-                st.bvh.trace.leaf_steps += 1;
-                let shared = n.len() > 1;
-                for &p in &self.bvh.refs[n.first as usize..(n.first + n.len()) as usize] {
-                    if shared && !self.entry::<S>(p, r, q, limit(&best), st) {
-                        continue;
-                    }
-                    if let Some(h) = self.bvh.test_prim(p, r, limit(&best), &mut st.bvh) {
-                        if !best.is_hit() || h.t < best.t || tie_wins(&h, &best) {
-                            best = h;
-                        }
-                    }
-                }
-                continue;
-            }
-            st.bvh.trace.interior_steps += 1;
-            let base = sp;
-            for c in n.first..n.first + n.len() {
-                let ci = c as usize;
-                let hit =
-                    Self::test::<S>(&self.rects[ci], &self.bvh.nodes[ci], r, q, limit(&best), st);
-                if let Some(t) = hit {
-                    push_nearest_last(stack, base, &mut sp, BvhStackItem { node: c, t });
-                }
-            }
-        }
-        best
+        let test = ProjTest::<S> { h: self, r, q };
+        self.bvh.closest(r, &test, stack, st)
     }
 
     fn any<const S: u8>(
@@ -159,46 +105,10 @@ impl ProjHierarchy<'_> {
         r: &PreparedRay,
         q: &Projected,
         stack: &mut [BvhStackItem],
-        st: &mut ProjStats,
+        st: &mut TraceStats,
     ) -> bool {
-        let root = self.bvh.info.root as usize;
-        let t_max = r.t_max;
-        if Self::test::<S>(&self.rects[root], &self.bvh.nodes[root], r, q, t_max, st).is_none() {
-            return false;
-        }
-        stack[0] = BvhStackItem {
-            node: root as u32,
-            t: 0.0,
-        };
-        let mut sp = 1;
-        while sp > 0 {
-            sp -= 1;
-            let n = self.bvh.nodes[stack[sp].node as usize];
-            st.bvh.trace.traversal_steps += 1;
-            if n.is_leaf() {
-                st.bvh.trace.leaf_steps += 1;
-                let shared = n.len() > 1;
-                for &p in &self.bvh.refs[n.first as usize..(n.first + n.len()) as usize] {
-                    if shared && !self.entry::<S>(p, r, q, t_max, st) {
-                        continue;
-                    }
-                    if self.bvh.test_prim(p, r, t_max, &mut st.bvh).is_some() {
-                        return true;
-                    }
-                }
-                continue;
-            }
-            st.bvh.trace.interior_steps += 1;
-            for c in n.first..n.first + n.len() {
-                let ci = c as usize;
-                if Self::test::<S>(&self.rects[ci], &self.bvh.nodes[ci], r, q, t_max, st).is_some()
-                {
-                    stack[sp] = BvhStackItem { node: c, t: 0.0 };
-                    sp += 1;
-                }
-            }
-        }
-        false
+        let test = ProjTest::<S> { h: self, r, q };
+        self.bvh.any(r, &test, stack, st)
     }
 
     /// The ray's point on the plane, when it lies on a line through the
@@ -239,20 +149,33 @@ impl ProjHierarchy<'_> {
         }
     }
 
+    fn check_stack(&self, stack: &[BvhStackItem]) {
+        assert!(
+            stack.len() >= self.bvh.stack_len(),
+            "projection traversal stack of {} entries: needs stack_len() = {}",
+            stack.len(),
+            self.bvh.stack_len()
+        );
+    }
+
     /// Closest hit of `ray` by `scheme`, or `None` when the plane cannot
     /// take the ray (not on a line through its eye; see
     /// [`ProjHierarchy::project`]): trace such a ray, as every secondary
     /// ray, through a 3D hierarchy. `stack` holds at least
-    /// `bvh.stack_len()` entries.
+    /// [`ProjHierarchy::stack_len`] entries.
+    ///
+    /// # Panics
+    /// When `stack` is shorter than that.
     pub fn intersect(
         &self,
         ray: &Ray,
         scheme: ProjScheme,
         stack: &mut [BvhStackItem],
-        st: &mut ProjStats,
+        st: &mut TraceStats,
     ) -> Option<Hit> {
         let q = self.project(ray)?;
-        st.bvh.trace.rays += 1;
+        self.check_stack(stack);
+        st.rays += 1;
         if !ray.is_valid() || self.bvh.info.ref_count == 0 {
             return Some(Hit::MISS);
         }
@@ -274,10 +197,11 @@ impl ProjHierarchy<'_> {
         ray: &Ray,
         scheme: ProjScheme,
         stack: &mut [BvhStackItem],
-        st: &mut ProjStats,
+        st: &mut TraceStats,
     ) -> Option<bool> {
         let q = self.project(ray)?;
-        st.bvh.trace.rays += 1;
+        self.check_stack(stack);
+        st.rays += 1;
         if !ray.is_valid() || self.bvh.info.ref_count == 0 {
             return Some(false);
         }

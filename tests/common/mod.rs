@@ -1,21 +1,24 @@
 //! Scene and ray generators, and owned storage for building in tests.
 #![allow(dead_code)]
 
-use coray::kd::{
-    self, KdEvent, KdLeaf, KdNode, KdParams, KdRequirements, KdRopes, KdScratch, KdStorage, KdTree,
-};
+use coray::kd::{self, KdParams, KdRequirements, KdStackItem, KdTree, KD_STACK_LEN};
+use coray::owned::OwnedKd;
 use coray::{Cone, Ray, Scene, Sphere, Vec3};
 
-/// SplitMix64: small, seedable, good enough for test data.
+/// A fresh kd traversal stack.
+pub fn kst() -> Vec<KdStackItem> {
+    coray::owned::stack(KD_STACK_LEN)
+}
+
+/// The project's one generator (SplitMix64), with test conveniences.
 pub struct Rng(pub u64);
 
 impl Rng {
     pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
+        let mut g = coray::rng::SplitMix64(self.0);
+        let v = g.next_u64();
+        self.0 = g.0;
+        v
     }
     /// Uniform in [0, 1).
     pub fn f(&mut self) -> f32 {
@@ -142,57 +145,36 @@ pub fn random_rays(rng: &mut Rng, n: usize, s: f32) -> Vec<Ray> {
         .collect()
 }
 
-/// Owned storage of a built tree and its scratch.
-pub struct Built {
-    pub nodes: Vec<KdNode>,
-    pub leaves: Vec<KdLeaf>,
-    pub ropes: Vec<KdRopes>,
-    pub refs: Vec<u32>,
+/// Room for a tree (and its scratch) of exactly `req`'s counts.
+pub fn storage_for(req: &KdRequirements) -> (OwnedKd, (), ()) {
+    (OwnedKd::with_room(req), (), ())
 }
 
-pub fn storage_for(req: &KdRequirements) -> (Built, Vec<KdEvent>, Vec<u8>) {
-    (
-        Built {
-            nodes: vec![KdNode::default(); req.nodes],
-            leaves: vec![KdLeaf::default(); req.leaves],
-            ropes: vec![KdRopes::default(); req.ropes],
-            refs: vec![0; req.refs],
-        },
-        vec![KdEvent::default(); req.events],
-        vec![0; req.prim_flags],
-    )
-}
-
-/// Builds with slices of exactly `req`'s lengths; panics on error.
+/// Builds into `b` (room of `req`'s counts); panics on error; validates.
 pub fn build_with<'a>(
     scene: &Scene<'a>,
     params: &KdParams,
-    req: &KdRequirements,
-    b: &'a mut Built,
+    _req: &KdRequirements,
+    b: &'a mut OwnedKd,
 ) -> KdTree<'a> {
-    let (_, mut events, mut flags) = storage_for(req);
-    let storage = KdStorage {
-        nodes: &mut b.nodes,
-        leaves: &mut b.leaves,
-        ropes: &mut b.ropes,
-        refs: &mut b.refs,
-    };
-    let tree = kd::build_sah(
-        scene,
-        params,
-        storage,
-        KdScratch {
-            events: &mut events,
-            prim_flags: &mut flags,
-        },
-    )
-    .expect("build");
+    b.build(scene, params).expect("build");
+    let tree = b.tree(*scene).expect("tree");
     tree.validate().expect("validate after build");
     tree
 }
 
-pub fn ideal_storage(scene: &Scene, params: &KdParams) -> (KdRequirements, Built) {
+pub fn ideal_storage(scene: &Scene, params: &KdParams) -> (KdRequirements, OwnedKd) {
     let req = kd::requirements(scene.prim_count(), params);
-    let (b, _, _) = storage_for(&req);
-    (req, b)
+    (req, OwnedKd::with_room(&req))
+}
+
+/// The global index (triangles, then spheres, then cones) of a hit's
+/// primitive, `u32::MAX` for a miss.
+pub fn global_prim(s: &Scene, h: &coray::Hit) -> u32 {
+    match h.geom_id {
+        0 => h.prim_id,
+        1 => s.triangles.len() as u32 + h.prim_id,
+        2 => (s.triangles.len() + s.spheres.len()) as u32 + h.prim_id,
+        _ => u32::MAX,
+    }
 }

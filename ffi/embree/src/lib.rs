@@ -7,7 +7,6 @@
 //! [`EmbreeScene`] normalised directions when the scene has cones (the
 //! cross-check tests show the error otherwise).
 #![deny(unsafe_op_in_unsafe_fn)]
-#![warn(missing_docs)]
 
 pub mod sys;
 
@@ -19,6 +18,31 @@ use sys::*;
 pub struct EmbreeScene {
     device: RTCDevice,
     scene: RTCScene,
+    /// Bytes Embree's device holds (allocations less releases) and the
+    /// most it held, as its memory monitor reports them.
+    memory: Box<Memory>,
+}
+
+/// What the memory monitor saw.
+#[derive(Default)]
+struct Memory {
+    now: std::sync::atomic::AtomicI64,
+    peak: std::sync::atomic::AtomicI64,
+}
+
+/// Embree's memory monitor: adds every allocation and release.
+///
+/// # Safety
+/// `user` is the `Memory` the device was given, alive as long as the device.
+unsafe extern "C" fn monitor(user: *mut core::ffi::c_void, bytes: isize, post: bool) -> bool {
+    use std::sync::atomic::Ordering::Relaxed;
+    // Releases are reported after the fact (post = true), allocations before.
+    let _ = post;
+    // SAFETY: the caller's contract: `user` points to the live Memory.
+    let m = unsafe { &*(user as *const Memory) };
+    let now = m.now.fetch_add(bytes as i64, Relaxed) + bytes as i64;
+    m.peak.fetch_max(now, Relaxed);
+    true
 }
 
 // SAFETY: Embree scenes are thread-safe for rtcIntersect1/rtcOccluded1 once
@@ -51,6 +75,7 @@ impl EmbreeScene {
         // SAFETY: every call below follows Embree's API contract: handles
         // come from the matching rtcNew* call and are used while alive;
         // buffers are sized by rtcSetNewGeometryBuffer for what is copied in.
+        let memory = Box::<Memory>::default();
         unsafe {
             let device = rtcNewDevice(config.as_ptr());
             assert!(
@@ -58,6 +83,8 @@ impl EmbreeScene {
                 "rtcNewDevice failed (error {})",
                 rtcGetDeviceError(std::ptr::null_mut())
             );
+            let user = &*memory as *const Memory as *mut core::ffi::c_void;
+            rtcSetDeviceMemoryMonitorFunction(device, Some(monitor), user);
             let scene = rtcNewScene(device);
             rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
             rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
@@ -103,8 +130,24 @@ impl EmbreeScene {
                 rtcReleaseGeometry(g);
             }
             rtcCommitScene(scene);
-            EmbreeScene { device, scene }
+            EmbreeScene {
+                device,
+                scene,
+                memory,
+            }
         }
+    }
+
+    /// Bytes the device holds once the scene is built (allocations less
+    /// releases, the geometry buffers' copies of the scene included), and
+    /// the most it held during the build.
+    pub fn memory_bytes(&self) -> (u64, u64) {
+        use std::sync::atomic::Ordering::Relaxed;
+        let m = &self.memory;
+        (
+            m.now.load(Relaxed).max(0) as u64,
+            m.peak.load(Relaxed).max(0) as u64,
+        )
     }
 
     fn context() -> RTCIntersectContext {
@@ -112,6 +155,83 @@ impl EmbreeScene {
             flags: RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT,
             filter: std::ptr::null(),
             instID: [RTC_INVALID_GEOMETRY_ID],
+        }
+    }
+
+    fn coherent() -> RTCIntersectContext {
+        RTCIntersectContext {
+            flags: RTC_INTERSECT_CONTEXT_FLAG_COHERENT,
+            ..Self::context()
+        }
+    }
+
+    /// Fills lanes `0..rays.len()` (at most 8) of a packet; the rest stay
+    /// invalid.
+    fn packet(rays: &[Ray]) -> ([i32; 8], RTCRay8) {
+        let mut valid = [0i32; 8];
+        let mut p = RTCRay8 {
+            mask: [u32::MAX; 8],
+            ..RTCRay8::default()
+        };
+        for (i, r) in rays.iter().enumerate().take(8) {
+            valid[i] = -1;
+            p.org_x[i] = r.origin.x;
+            p.org_y[i] = r.origin.y;
+            p.org_z[i] = r.origin.z;
+            p.tnear[i] = r.t_min;
+            p.dir_x[i] = r.dir.x;
+            p.dir_y[i] = r.dir.y;
+            p.dir_z[i] = r.dir.z;
+            p.tfar[i] = r.t_max;
+        }
+        (valid, p)
+    }
+
+    /// Closest hits with `rtcIntersect8`, rays taken 8 at a time in order
+    /// (the caller orders coherent rays into packets: 4 x 2 pixel blocks).
+    pub fn intersect8(&self, rays: &[Ray], out: &mut [Hit]) {
+        let mut ctx = Self::coherent();
+        for (chunk, hits) in rays.chunks(8).zip(out.chunks_mut(8)) {
+            let (valid, ray) = Self::packet(chunk);
+            let mut rh = RTCRayHit8 {
+                ray,
+                hit: RTCHit8 {
+                    geomID: [RTC_INVALID_GEOMETRY_ID; 8],
+                    primID: [RTC_INVALID_GEOMETRY_ID; 8],
+                    ..RTCHit8::default()
+                },
+            };
+            // SAFETY: a committed scene; valid mask, context and the
+            // 32-byte aligned ray-hit packet live on our stack.
+            unsafe { rtcIntersect8(valid.as_ptr(), self.scene, &mut ctx, &mut rh) };
+            for (i, h) in hits.iter_mut().enumerate() {
+                let g = rh.hit.geomID[i];
+                *h = if g == RTC_INVALID_GEOMETRY_ID {
+                    Hit::MISS
+                } else {
+                    Hit {
+                        t: rh.ray.tfar[i],
+                        u: rh.hit.u[i],
+                        v: rh.hit.v[i],
+                        ng: Vec3::new(rh.hit.Ng_x[i], rh.hit.Ng_y[i], rh.hit.Ng_z[i]),
+                        geom_id: g,
+                        prim_id: rh.hit.primID[i],
+                    }
+                };
+            }
+        }
+    }
+
+    /// Any hits with `rtcOccluded8`, rays taken 8 at a time in order.
+    pub fn occluded8(&self, rays: &[Ray], out: &mut [bool]) {
+        let mut ctx = Self::coherent();
+        for (chunk, occ) in rays.chunks(8).zip(out.chunks_mut(8)) {
+            let (valid, mut ray) = Self::packet(chunk);
+            // SAFETY: as in intersect8.
+            unsafe { rtcOccluded8(valid.as_ptr(), self.scene, &mut ctx, &mut ray) };
+            for (i, o) in occ.iter_mut().enumerate() {
+                *o = ray.tfar[i] == f32::NEG_INFINITY;
+            }
         }
     }
 
@@ -168,7 +288,8 @@ impl EmbreeScene {
 
 impl Drop for EmbreeScene {
     fn drop(&mut self) {
-        // SAFETY: handles from new(), released once.
+        // SAFETY: handles from new(), released once; the memory monitor's
+        // Memory outlives the device (it is dropped after this).
         unsafe {
             rtcReleaseScene(self.scene);
             rtcReleaseDevice(self.device);
@@ -176,62 +297,7 @@ impl Drop for EmbreeScene {
     }
 }
 
-/// How a coray hit and an Embree hit of the same ray relate.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Agreement {
-    /// Both miss, or both hit the same primitive within the tolerance.
-    Same,
-    /// Different primitives at the same distance (shared edges, coincident surfaces).
-    TieSameDistance,
-    /// The nearer answer grazes (see [`grazing`]), where a rounding error
-    /// turns a hit into a miss.
-    TieGrazing,
-    /// Anything else.
-    Mismatch,
-}
-
-/// The cross-check's tolerance: |dt| <= 1e-4 max(1, |t|).
-pub fn tolerance(t: f32) -> f32 {
-    1e-4 * t.abs().max(1.0)
-}
-
-/// True when rounding can turn `h` into a miss on `r`: near a triangle's
-/// edge, at a cone's rim, tangent to the surface, or within the tolerance
-/// of the ray's start (a ray leaving a surface meeting that surface again).
-pub fn grazing(r: &Ray, h: &Hit) -> bool {
-    if h.t < r.t_min + tolerance(r.t_min) {
-        return true;
-    }
-    let edge = match h.geom_id {
-        coray::geom::GEOM_TRIANGLES => h.u.min(h.v).min(1.0 - h.u - h.v) < 1e-4,
-        coray::geom::GEOM_CONES => h.u < 1e-3 || h.u > 1.0 - 1e-3,
-        _ => false,
-    };
-    let cos = r.dir.normalize().dot(h.ng.normalize()).abs();
-    edge || cos < 2e-2
-}
-
-/// Classifies a ray's two answers (the documented tie rules of the cross-checks).
-pub fn classify(r: &Ray, a: &Hit, b: &Hit) -> Agreement {
-    match (a.is_hit(), b.is_hit()) {
-        (false, false) => return Agreement::Same,
-        (true, true) if (a.t - b.t).abs() <= tolerance(a.t) => {
-            return if (a.geom_id, a.prim_id) == (b.geom_id, b.prim_id) {
-                Agreement::Same
-            } else {
-                Agreement::TieSameDistance
-            };
-        }
-        _ => {}
-    }
-    let nearer = if !b.is_hit() || (a.is_hit() && a.t < b.t) {
-        a
-    } else {
-        b
-    };
-    if grazing(r, nearer) {
-        Agreement::TieGrazing
-    } else {
-        Agreement::Mismatch
-    }
-}
+/// The tie rules of every comparison with Embree: one table, in the core
+/// (`coray::tolerance`), shared by the cross-checks, `coray compare` and
+/// `coray bench`.
+pub use coray::tolerance::{classify, classify_occluded, grazing, t_tolerance, Agreement};

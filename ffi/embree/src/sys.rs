@@ -27,6 +27,7 @@ pub const RTC_BUILD_QUALITY_HIGH: u32 = 2;
 pub const RTC_CURVE_FLAG_NEIGHBOR_LEFT: u8 = 1;
 pub const RTC_CURVE_FLAG_NEIGHBOR_RIGHT: u8 = 2;
 pub const RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT: u32 = 0;
+pub const RTC_INTERSECT_CONTEXT_FLAG_COHERENT: u32 = 1;
 
 #[repr(C)]
 pub struct RTCIntersectContext {
@@ -72,7 +73,51 @@ pub struct RTCRayHit {
     pub hit: RTCHit,
 }
 
+#[repr(C, align(32))]
+#[derive(Clone, Copy, Default)]
+pub struct RTCRay8 {
+    pub org_x: [f32; 8],
+    pub org_y: [f32; 8],
+    pub org_z: [f32; 8],
+    pub tnear: [f32; 8],
+    pub dir_x: [f32; 8],
+    pub dir_y: [f32; 8],
+    pub dir_z: [f32; 8],
+    pub time: [f32; 8],
+    pub tfar: [f32; 8],
+    pub mask: [u32; 8],
+    pub id: [u32; 8],
+    pub flags: [u32; 8],
+}
+
+#[repr(C, align(32))]
+#[derive(Clone, Copy, Default)]
+pub struct RTCHit8 {
+    pub Ng_x: [f32; 8],
+    pub Ng_y: [f32; 8],
+    pub Ng_z: [f32; 8],
+    pub u: [f32; 8],
+    pub v: [f32; 8],
+    pub primID: [u32; 8],
+    pub geomID: [u32; 8],
+    pub instID: [[u32; 8]; 1],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Default)]
+pub struct RTCRayHit8 {
+    pub ray: RTCRay8,
+    pub hit: RTCHit8,
+}
+
+/// `bool (*)(void *ptr, ssize_t bytes, bool post)`: Embree's device memory
+/// monitor; `bytes` is positive for an allocation, negative for a release.
+pub type RTCMemoryMonitorFunction =
+    Option<unsafe extern "C" fn(ptr: *mut c_void, bytes: isize, post: bool) -> bool>;
+
 const _: () = {
+    assert!(core::mem::size_of::<RTCRay8>() == 384);
+    assert!(core::mem::size_of::<RTCHit8>() == 256);
     assert!(core::mem::size_of::<RTCRay>() == 48);
     assert!(core::mem::size_of::<RTCHit>() == 32);
     assert!(core::mem::size_of::<RTCRayHit>() == 80);
@@ -105,4 +150,21 @@ extern "C" {
         rayhit: *mut RTCRayHit,
     );
     pub fn rtcOccluded1(scene: RTCScene, context: *mut RTCIntersectContext, ray: *mut RTCRay);
+    pub fn rtcIntersect8(
+        valid: *const i32,
+        scene: RTCScene,
+        context: *mut RTCIntersectContext,
+        rayhit: *mut RTCRayHit8,
+    );
+    pub fn rtcOccluded8(
+        valid: *const i32,
+        scene: RTCScene,
+        context: *mut RTCIntersectContext,
+        ray: *mut RTCRay8,
+    );
+    pub fn rtcSetDeviceMemoryMonitorFunction(
+        device: RTCDevice,
+        monitor: RTCMemoryMonitorFunction,
+        user: *mut c_void,
+    );
 }

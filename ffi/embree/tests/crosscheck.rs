@@ -3,20 +3,16 @@
 //! surface rays with unit directions. Same hit or miss, same primitive,
 //! |dt| <= 1e-4 max(1, t), except documented ties (same distance; grazing an
 //! edge, silhouette or rim), which are counted and printed.
-use coray::kd::{
-    self, KdEvent, KdLeaf, KdNode, KdParams, KdRopes, KdScratch, KdStorage, Traversal,
-};
+use coray::kd::{KdParams, Traversal, KD_STACK_LEN};
+use coray::owned::{stack, OwnedKd};
+use coray::rng::SplitMix64;
 use coray::{Camera, Cone, Hit, Ray, Scene, Sphere, TraceStats, Vec3};
 use coray_embree::{classify, grazing, Agreement, EmbreeScene};
 
-struct Rng(u64);
+struct Rng(SplitMix64);
 impl Rng {
     fn f(&mut self) -> f32 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
+        self.0.next_f32()
     }
     fn range(&mut self, lo: f32, hi: f32) -> f32 {
         lo + (hi - lo) * self.f()
@@ -36,7 +32,7 @@ impl Rng {
 
 #[test]
 fn coray_matches_embree_on_a_million_rays() {
-    let mut rng = Rng(21);
+    let mut rng = Rng(SplitMix64(21));
     let mut vertices = Vec::new();
     let mut triangles = Vec::new();
     for q in 0..6000u32 {
@@ -116,37 +112,18 @@ fn coray_matches_embree_on_a_million_rays() {
     let reference_any: Vec<bool> = rays.iter().map(|r| embree.occluded(r)).collect();
 
     for (name, params) in [("auto", KdParams::auto()), ("paper", KdParams::paper())] {
-        let req = kd::requirements(scene.prim_count(), &params);
-        let mut nodes = vec![KdNode::default(); req.nodes];
-        let mut leaves = vec![KdLeaf::default(); req.leaves];
-        let mut ropes = vec![KdRopes::default(); req.ropes];
-        let mut refs = vec![0u32; req.refs];
-        let mut events = vec![KdEvent::default(); req.events];
-        let mut flags = vec![0u8; req.prim_flags];
-        let tree = kd::build_sah(
-            &scene,
-            &params,
-            KdStorage {
-                nodes: &mut nodes,
-                leaves: &mut leaves,
-                ropes: &mut ropes,
-                refs: &mut refs,
-            },
-            KdScratch {
-                events: &mut events,
-                prim_flags: &mut flags,
-            },
-        )
-        .unwrap();
+        let owned = OwnedKd::new(&scene, &params).unwrap();
+        let tree = owned.tree(scene).unwrap();
         tree.validate().unwrap();
         for method in [Traversal::Hierarchical, Traversal::Ropes] {
             let (mut hits, mut same_t, mut graze, mut bad, mut bad_any) = (0, 0, 0, 0, 0);
             let mut st = TraceStats::default();
+            let mut stk = stack(KD_STACK_LEN);
             for (i, r) in rays.iter().enumerate() {
-                let a = tree.intersect(r, method, &mut st);
+                let a = tree.intersect(r, method, &mut stk, &mut st);
                 let b = &reference[i];
                 hits += a.is_hit() as usize;
-                let any = tree.occluded(r, method, &mut st);
+                let any = tree.occluded(r, method, &mut stk, &mut st);
                 assert_eq!(any, a.is_hit(), "occluded and intersect disagree in coray");
                 if any != reference_any[i] && !(grazing(r, &a) || grazing(r, b)) {
                     bad_any += 1;

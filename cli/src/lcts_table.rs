@@ -2,17 +2,31 @@
 //! Tables 2 and 3 (one block per traversal method, one column per scene or
 //! resolution), with the paper's alpha and eta printed beside ours.
 
-use crate::bench::{self, Row};
+use crate::bench::{self, Row, Settings};
+use crate::built::Built;
+use crate::method::Method;
 use crate::scene::SceneData;
+use coray::kd::Traversal;
+use coray::lcts::Scheme;
 
-/// The six methods of the paper's tables, in its order, with its names.
-pub const LCTS_METHODS: [(&str, &str); 6] = [
-    ("kd", "hierarchical traversal"),
-    ("kd-rope", "rope traversal"),
-    ("slcts1d", "SLCTS-1D window 5 x 1 pixels"),
-    ("hlcts1d", "HLCTS-1D"),
-    ("slcts2d", "SLCTS-2D window 5 x 5 pixels"),
-    ("hlcts2d", "HLCTS-2D"),
+/// The six methods of the paper's tables, in its order: the row's name,
+/// the image cast, the paper's title. The hierarchical and rope rows are
+/// casts too (the same harness as the LCTS schemes).
+pub const LCTS_METHODS: [(&str, Scheme, &str); 6] = [
+    ("kd", Scheme::Hierarchical, "hierarchical traversal"),
+    ("kd-rope", Scheme::Ropes, "rope traversal"),
+    (
+        "slcts1d",
+        Scheme::Slcts1d { n: 5 },
+        "SLCTS-1D window 5 x 1 pixels",
+    ),
+    ("hlcts1d", Scheme::Hlcts1d, "HLCTS-1D"),
+    (
+        "slcts2d",
+        Scheme::Slcts2d { n: 5, m: 5 },
+        "SLCTS-2D window 5 x 5 pixels",
+    ),
+    ("hlcts2d", Scheme::Hlcts2d, "HLCTS-2D"),
 ];
 
 /// The eight SPD scenes of Table 2 (the paper's `fluid` is not an SPD scene).
@@ -86,12 +100,16 @@ fn paper_table3(method: &str, res: u32) -> Option<(f64, f64)> {
 
 /// One column of a table: a scene at one resolution, all six methods.
 pub struct Column {
+    /// Its heading.
     pub label: String,
+    /// The scene's name.
     pub scene: String,
+    /// The resolution (square).
     pub res: u32,
+    /// One row per method.
     pub rows: Vec<Row>,
     /// The column as a `coray bench --json` object.
-    pub json: String,
+    pub json: serde_json::Value,
 }
 
 impl Column {
@@ -110,24 +128,29 @@ impl Column {
 /// each as an image cast through the same harness, each compared with the
 /// hierarchical cast timed in its own run (so the hierarchical row's eta
 /// shows the timing noise).
-pub fn column(
-    s: &SceneData,
-    label: String,
-    params: &coray::kd::KdParams,
-    repeat: usize,
-) -> Result<Column, String> {
+pub fn column(s: &SceneData, label: String, set: &Settings) -> Result<Column, String> {
+    let built = Built::new(Method::kd(Traversal::Hierarchical), &s.mesh, set.preset, 1)?;
+    let kd = built.kd().expect("a kd method");
+    let tree = kd.tree(s.mesh.scene()).map_err(|e| e.to_string())?;
     let rows = LCTS_METHODS
         .iter()
-        .map(|(m, _)| {
-            let scheme = bench::lcts_scheme(m).expect("an LCTS table method");
-            Ok(bench::run_lcts(s, params, scheme, m, repeat)?.row)
+        .map(|&(name, scheme, _)| {
+            bench::row::run_cast(
+                &tree,
+                &s.mesh.camera,
+                scheme,
+                name,
+                built.build_ms,
+                kd.arena_bytes(),
+                set.repeat,
+            )
         })
         .collect::<Result<Vec<Row>, String>>()?;
     Ok(Column {
         label,
         scene: s.name.clone(),
         res: s.mesh.camera.width,
-        json: bench::to_json(s, &rows),
+        json: bench::report::to_json(s, &rows, 1),
         rows,
     })
 }
@@ -177,11 +200,8 @@ pub fn print(table: Table, cols: &[Column]) {
     let per_col = |f: &dyn Fn(&Column) -> Option<f64>, p: usize| -> Vec<String> {
         cols.iter().map(|c| cell(f(c), p)).collect()
     };
-    line(
-        "isect/ray",
-        per_col(&|c| bench::reference(&c.rows)?.isect_per_ray, 2),
-    );
-    for (m, title) in LCTS_METHODS {
+    line("isect/ray", per_col(&|c| c.row("kd")?.isect_per_ray, 2));
+    for (m, _, title) in LCTS_METHODS {
         println!("{title}");
         line("TSPR", per_col(&|c| c.row(m)?.tspr, 2));
         line("tau [s]", per_col(&|c| Some(c.row(m)?.primary_s), 3));
@@ -211,10 +231,20 @@ pub fn print(table: Table, cols: &[Column]) {
             );
         }
     }
+    println!("{LEGEND}");
 }
 
+/// The legend under the LCTS tables.
+pub const LEGEND: &str = "\
+rows: TSPR = traversal steps (nodes visited) per ray; tau = seconds of the cast (best of
+  --repeat); alpha = TSPR and eta = tau relative to the hierarchical cast of the same pixels,
+  timed in turn (so the hierarchical row's eta is the timing noise); gamma = share of windows
+  whose common traversal sequence holds a leaf; isect/ray = ray-primitive tests per ray;
+  mismatches = pixels whose primitive or t differ from the hierarchical cast; ties = of those,
+  two primitives at one t. (paper) rows: Havran and Bittner's values. docs/design.md defines
+  every metric.";
+
 /// The columns as JSON: an array of `coray bench --json` objects.
-pub fn to_json(cols: &[Column]) -> String {
-    let items: Vec<&str> = cols.iter().map(|c| c.json.as_str()).collect();
-    format!("[{}]", items.join(", "))
+pub fn to_json(cols: &[Column]) -> serde_json::Value {
+    cols.iter().map(|c| c.json.clone()).collect()
 }

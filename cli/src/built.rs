@@ -1,0 +1,168 @@
+//! A [`Method`] built over a scene: the owned structure, what the build
+//! took, and the one [`Shooter`] that traces through it. Callers pass a
+//! [`Visit`] that receives the shooter with its concrete type, so every
+//! structure gets its own monomorphised loops.
+
+use crate::method::{Method, Preset};
+use crate::projrig::ProjRig;
+use crate::shoot::{AccelShooter, Shooter};
+use coray::kd::Traversal;
+use coray::owned::{OwnedBvh, OwnedKd};
+use coray::{Aabb, Scene};
+use coray_scenes::SceneMesh;
+use std::time::Instant;
+
+enum Inner<'s> {
+    Kd(OwnedKd, Traversal),
+    Bvh(OwnedBvh),
+    Proj(Box<ProjRig<'s>>),
+    #[cfg(feature = "embree")]
+    Embree(coray_embree::EmbreeScene, bool),
+}
+
+/// A method built over a scene.
+pub struct Built<'s> {
+    /// The method.
+    pub method: Method,
+    /// Build time, allocation excluded (ms).
+    pub build_ms: f64,
+    /// Bytes of the structure (a C arena's size for a kd-tree).
+    pub bytes: Option<usize>,
+    /// A kd-tree whose room ran out.
+    pub truncated: bool,
+    scene: Scene<'s>,
+    bounds: Aabb,
+    inner: Inner<'s>,
+}
+
+/// Work done with a structure's shooter, whatever its type.
+pub trait Visit {
+    /// What the work returns.
+    type Out;
+    /// Does it.
+    fn visit<S: Shooter>(self, shooter: &S) -> Self::Out;
+}
+
+impl<'s> Built<'s> {
+    /// Builds `method` over `mesh`'s scene; `preset` is the command's, for
+    /// kd methods that name none; `threads` is Embree's build threads.
+    pub fn new(
+        method: Method,
+        mesh: &'s SceneMesh,
+        preset: Preset,
+        threads: usize,
+    ) -> Result<Built<'s>, String> {
+        method.available()?;
+        let scene = mesh.scene();
+        let bounds = scene.bounds();
+        let err = |e: coray::Error| format!("{method} build: {e}");
+        let mut b = Built {
+            method,
+            build_ms: 0.0,
+            bytes: None,
+            truncated: false,
+            scene,
+            bounds,
+            inner: Inner::Kd(
+                OwnedKd::with_room(&Default::default()),
+                Traversal::Hierarchical,
+            ),
+        };
+        match method {
+            Method::Kd {
+                preset: p,
+                traversal,
+            } => {
+                let params = p.unwrap_or(preset).params();
+                let mut o =
+                    OwnedKd::with_room(&coray::kd::requirements(scene.prim_count(), &params));
+                let t = Instant::now();
+                o.build(&scene, &params).map_err(err)?;
+                b.build_ms = ms(t);
+                b.bytes = Some(o.arena_bytes());
+                b.truncated = o.info().truncated();
+                b.inner = Inner::Kd(o, traversal);
+            }
+            Method::Cast { .. } => {
+                return Err(format!("{method} casts images: use it with `coray bench`"))
+            }
+            Method::Bvh { build, .. } => {
+                let mut o = OwnedBvh::with_room(scene.prim_count(), build);
+                let t = Instant::now();
+                o.build(&scene).map_err(err)?;
+                b.build_ms = ms(t);
+                b.bytes = Some(o.bytes());
+                b.inner = Inner::Bvh(o);
+            }
+            Method::Proj(m) => {
+                let rig = ProjRig::for_mesh(mesh, m)?;
+                b.build_ms = rig.view_ms + rig.light_ms + rig.global_ms;
+                b.inner = Inner::Proj(Box::new(rig));
+            }
+            #[cfg(feature = "embree")]
+            Method::Embree(call) => {
+                let t = Instant::now();
+                let e = coray_embree::EmbreeScene::new(&scene, Some(threads as u32));
+                b.build_ms = ms(t);
+                b.bytes = Some(e.memory_bytes().0 as usize);
+                b.inner = Inner::Embree(e, call == crate::method::EmbreeCall::Eight);
+            }
+            #[cfg(not(feature = "embree"))]
+            Method::Embree(_) => unreachable!("available() refused it"),
+        }
+        let _ = threads;
+        Ok(b)
+    }
+
+    /// Does `v` with this structure's shooter.
+    pub fn visit<V: Visit>(&self, v: V) -> V::Out {
+        match &self.inner {
+            Inner::Kd(o, traversal) => v.visit(&AccelShooter {
+                accel: o.tree(self.scene).expect("just built"),
+                method: *traversal,
+                bounds: self.bounds,
+            }),
+            Inner::Bvh(o) => v.visit(&AccelShooter {
+                accel: o.view(self.scene).expect("just built"),
+                method: (),
+                bounds: self.bounds,
+            }),
+            Inner::Proj(rig) => v.visit(rig.as_ref()),
+            #[cfg(feature = "embree")]
+            Inner::Embree(e, packets) => v.visit(&crate::shoot::EmbreeShooter {
+                scene: e,
+                packets: *packets,
+                bounds: self.bounds,
+            }),
+        }
+    }
+
+    /// The kd-tree, for the statistics and casts of kd methods.
+    pub fn kd(&self) -> Option<&OwnedKd> {
+        match &self.inner {
+            Inner::Kd(o, _) => Some(o),
+            _ => None,
+        }
+    }
+
+    /// A hierarchy's size and shape, from its validation.
+    pub fn bvh_stats(&self) -> Result<coray::bvh::BvhTreeStats, String> {
+        match &self.inner {
+            Inner::Bvh(o) => o.validate(self.scene).map_err(|e| e.to_string()),
+            _ => Err(format!("{} is not a hierarchy", self.method)),
+        }
+    }
+
+    /// The projection rig, for its split preprocessing times.
+    pub fn rig(&self) -> Option<&ProjRig<'s>> {
+        match &self.inner {
+            Inner::Proj(r) => Some(r),
+            _ => None,
+        }
+    }
+}
+
+/// Milliseconds since `t`.
+pub fn ms(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}

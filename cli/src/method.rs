@@ -1,0 +1,383 @@
+//! Every method the command knows, in one registry: a [`Method`] parses and
+//! prints its own name, and says how it is built ([`crate::built`]). The
+//! help texts, the error messages, `render --accel`, `bench --methods` and
+//! the tables all take their names from here.
+
+use coray::bvh::{Builder, RTreeParams};
+use coray::kd::{KdParams, Traversal};
+use coray::lcts::Scheme;
+use coray::owned::BvhBuild;
+use coray::proj::{Criteria, ProjBuilder, ProjScheme};
+use std::fmt;
+
+/// A kd-tree build preset.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Preset {
+    /// SAH termination, depth bound from N.
+    Auto,
+    /// The LCTS paper's: depth 16, leaves of 2.
+    Paper,
+}
+
+impl Preset {
+    /// The names, for help and errors.
+    pub const NAMES: [&'static str; 2] = ["auto", "paper"];
+
+    /// Parses `auto` or `paper`.
+    pub fn parse(s: &str) -> Result<Preset, String> {
+        match s {
+            "auto" => Ok(Preset::Auto),
+            "paper" => Ok(Preset::Paper),
+            _ => Err(format!(
+                "unknown preset `{s}` (have: {})",
+                Preset::NAMES.join(", ")
+            )),
+        }
+    }
+
+    /// The build parameters.
+    pub fn params(self) -> KdParams {
+        match self {
+            Preset::Auto => KdParams::auto(),
+            Preset::Paper => KdParams::paper(),
+        }
+    }
+}
+
+/// The hierarchy builders by name.
+pub const BVH_NAMES: [(&str, BvhBuild); 7] = [
+    ("tdbs", BvhBuild::Static(Builder::Tdbs, 1)),
+    ("tdbs-sah", BvhBuild::Static(Builder::TdbsSah, 1)),
+    ("nn", BvhBuild::Static(Builder::Nn, 1)),
+    ("nn-chain", BvhBuild::Static(Builder::NnChain, 1)),
+    ("rtree", BvhBuild::RTree(RTreeParams::rtree())),
+    ("rstar", BvhBuild::RTree(RTreeParams::rstar())),
+    (
+        "rstar-reinsert",
+        BvhBuild::RTree(RTreeParams {
+            forced_reinsert: true,
+            ..RTreeParams::rstar()
+        }),
+    ),
+];
+
+/// The builders a projection hierarchy is made with, by name.
+pub const PROJ_BUILDERS: [&str; 4] = ["tdbs", "nn-chain", "rtree", "rstar"];
+
+/// How Embree is called in a benchmark.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EmbreeCall {
+    /// `rtcIntersect1` / `rtcOccluded1`, one ray at a time.
+    One,
+    /// `rtcIntersect8` / `rtcOccluded8` on packets of 8 (4 x 2 pixel blocks
+    /// of primary rays; 8 consecutive rays of the other sets).
+    Eight,
+}
+
+/// A projection method: builder, criteria, scheme.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProjMethod {
+    /// The builder.
+    pub builder: ProjBuilder,
+    /// What the structure is built on.
+    pub criteria: Criteria,
+    /// How nodes are tested.
+    pub scheme: ProjScheme,
+    /// The builder's name (also the global 3D hierarchy's).
+    pub builder_name: &'static str,
+}
+
+/// One way of tracing rays that the command can build and time.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Method {
+    /// A kd-tree traced ray by ray: the preset (`None`: the command's
+    /// `--preset`) and the traversal.
+    Kd {
+        /// Build preset, or the command's.
+        preset: Option<Preset>,
+        /// Hierarchical or ropes.
+        traversal: Traversal,
+    },
+    /// A kd-tree casting the camera's image by an LCTS scheme.
+    Cast {
+        /// The scheme (hierarchical and rope casts are its references).
+        scheme: Scheme,
+    },
+    /// A bounding volume hierarchy.
+    Bvh {
+        /// Its name in [`BVH_NAMES`].
+        name: &'static str,
+        /// How it is built.
+        build: BvhBuild,
+    },
+    /// Projection hierarchies (camera, light planes) and a global 3D one.
+    Proj(ProjMethod),
+    /// Intel Embree 3, the reference (needs feature `embree`).
+    Embree(EmbreeCall),
+}
+
+impl Method {
+    /// Every method of this build, in table order: the kd-tree's, the LCTS
+    /// casts, the hierarchies, Embree's.
+    pub fn all() -> Vec<Method> {
+        let mut v = vec![
+            Method::kd(Traversal::Hierarchical),
+            Method::kd(Traversal::Ropes),
+        ];
+        v.extend(Method::casts());
+        v.extend(
+            BVH_NAMES
+                .iter()
+                .map(|&(name, build)| Method::Bvh { name, build }),
+        );
+        if cfg!(feature = "embree") {
+            v.push(Method::Embree(EmbreeCall::One));
+            v.push(Method::Embree(EmbreeCall::Eight));
+        }
+        v
+    }
+
+    /// The kd-tree with the command's preset.
+    pub fn kd(traversal: Traversal) -> Method {
+        Method::Kd {
+            preset: None,
+            traversal,
+        }
+    }
+
+    /// The four LCTS image casts with the paper's windows.
+    pub fn casts() -> Vec<Method> {
+        [
+            Scheme::Slcts1d { n: 5 },
+            Scheme::Slcts2d { n: 5, m: 5 },
+            Scheme::Hlcts1d,
+            Scheme::Hlcts2d,
+        ]
+        .into_iter()
+        .map(|scheme| Method::Cast { scheme })
+        .collect()
+    }
+
+    /// Every projection method: 2D criteria with the three schemes; dummy
+    /// (3D structure) with 2D and combination (its 3D scheme is the plain
+    /// 3D hierarchy).
+    pub fn projections() -> Vec<Method> {
+        let mut v = Vec::new();
+        for b in PROJ_BUILDERS {
+            for (c, schemes) in [
+                (
+                    Criteria::TwoD,
+                    &[
+                        ProjScheme::TwoD,
+                        ProjScheme::ThreeD,
+                        ProjScheme::Combination,
+                    ][..],
+                ),
+                (
+                    Criteria::Dummy,
+                    &[ProjScheme::TwoD, ProjScheme::Combination][..],
+                ),
+            ] {
+                for &s in schemes {
+                    v.push(Method::Proj(ProjMethod {
+                        builder: proj_builder(b),
+                        criteria: c,
+                        scheme: s,
+                        builder_name: b,
+                    }));
+                }
+            }
+        }
+        v
+    }
+
+    /// The names of every method family, for help texts and errors.
+    pub fn help() -> String {
+        let names: Vec<String> = Method::all().iter().map(|m| m.to_string()).collect();
+        format!(
+            "{}, kd-paper, kd-paper-rope, slcts1d:N, slcts2d:NxM, and \
+             proj-BUILDER-CRITERIA-SCHEME (BUILDER {}, CRITERIA 2d|dummy, SCHEME 2d|3d|comb)",
+            names.join(", "),
+            PROJ_BUILDERS.join("|")
+        )
+    }
+
+    /// Parses a method name.
+    pub fn parse(s: &str) -> Result<Method, String> {
+        Method::try_parse(s)
+            .ok_or_else(|| format!("unknown method `{s}` (have: {})", Method::help()))
+    }
+
+    fn try_parse(s: &str) -> Option<Method> {
+        let kd = |preset, traversal| Some(Method::Kd { preset, traversal });
+        match s {
+            "kd" => return kd(None, Traversal::Hierarchical),
+            "kd-rope" => return kd(None, Traversal::Ropes),
+            "kd-paper" => return kd(Some(Preset::Paper), Traversal::Hierarchical),
+            "kd-paper-rope" => return kd(Some(Preset::Paper), Traversal::Ropes),
+            "kd-auto" => return kd(Some(Preset::Auto), Traversal::Hierarchical),
+            "kd-auto-rope" => return kd(Some(Preset::Auto), Traversal::Ropes),
+            "slcts1d" => return cast(Scheme::Slcts1d { n: 5 }),
+            "slcts2d" => return cast(Scheme::Slcts2d { n: 5, m: 5 }),
+            "hlcts1d" => return cast(Scheme::Hlcts1d),
+            "hlcts2d" => return cast(Scheme::Hlcts2d),
+            "embree" => return Some(Method::Embree(EmbreeCall::One)),
+            "embree8" => return Some(Method::Embree(EmbreeCall::Eight)),
+            _ => {}
+        }
+        let window = |v: &str| v.parse::<u32>().ok().filter(|&n| (2..=1024).contains(&n));
+        if let Some(n) = s.strip_prefix("slcts1d:") {
+            return cast(Scheme::Slcts1d { n: window(n)? });
+        }
+        if let Some(nm) = s.strip_prefix("slcts2d:") {
+            let (n, m) = nm.split_once('x')?;
+            return cast(Scheme::Slcts2d {
+                n: window(n)?,
+                m: window(m)?,
+            });
+        }
+        if let Some(&(name, build)) = BVH_NAMES.iter().find(|(n, _)| *n == s) {
+            return Some(Method::Bvh { name, build });
+        }
+        let rest = s.strip_prefix("proj-")?;
+        let (b, rest) = PROJ_BUILDERS.iter().find_map(|b| {
+            rest.strip_prefix(b)
+                .and_then(|r| r.strip_prefix('-'))
+                .map(|r| (*b, r))
+        })?;
+        let (c, sc) = rest.split_once('-')?;
+        let criteria = match c {
+            "2d" => Criteria::TwoD,
+            "dummy" => Criteria::Dummy,
+            _ => return None,
+        };
+        let scheme = match sc {
+            "2d" => ProjScheme::TwoD,
+            "3d" if criteria == Criteria::TwoD => ProjScheme::ThreeD,
+            "comb" => ProjScheme::Combination,
+            _ => return None,
+        };
+        Some(Method::Proj(ProjMethod {
+            builder: proj_builder(b),
+            criteria,
+            scheme,
+            builder_name: b,
+        }))
+    }
+
+    /// Whether this method is available in this build.
+    pub fn available(&self) -> Result<(), String> {
+        if matches!(self, Method::Embree(_)) && !cfg!(feature = "embree") {
+            return Err(format!(
+                "method `{self}` needs Embree: build coray with `--features embree` \
+                 (Debian's libembree-dev)"
+            ));
+        }
+        Ok(())
+    }
+}
+
+fn cast(scheme: Scheme) -> Option<Method> {
+    Some(Method::Cast { scheme })
+}
+
+fn proj_builder(name: &str) -> ProjBuilder {
+    match name {
+        "tdbs" => ProjBuilder::Static(Builder::Tdbs),
+        "nn-chain" => ProjBuilder::Static(Builder::NnChain),
+        "rtree" => ProjBuilder::RTree(RTreeParams::rtree()),
+        _ => ProjBuilder::RTree(RTreeParams::rstar()),
+    }
+}
+
+impl fmt::Display for Method {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Method::Kd { preset, traversal } => {
+                let p = match preset {
+                    None => "",
+                    Some(Preset::Auto) => "-auto",
+                    Some(Preset::Paper) => "-paper",
+                };
+                let t = if traversal == Traversal::Ropes {
+                    "-rope"
+                } else {
+                    ""
+                };
+                write!(f, "kd{p}{t}")
+            }
+            Method::Cast { scheme } => match scheme {
+                Scheme::Slcts1d { n: 5 } => f.write_str("slcts1d"),
+                Scheme::Slcts1d { n } => write!(f, "slcts1d:{n}"),
+                Scheme::Slcts2d { n: 5, m: 5 } => f.write_str("slcts2d"),
+                Scheme::Slcts2d { n, m } => write!(f, "slcts2d:{n}x{m}"),
+                Scheme::Hlcts1d => f.write_str("hlcts1d"),
+                Scheme::Hlcts2d => f.write_str("hlcts2d"),
+                Scheme::Hierarchical => f.write_str("cast-hierarchical"),
+                Scheme::Ropes => f.write_str("cast-ropes"),
+            },
+            Method::Bvh { name, .. } => f.write_str(name),
+            Method::Proj(p) => {
+                let c = match p.criteria {
+                    Criteria::TwoD => "2d",
+                    Criteria::Dummy => "dummy",
+                };
+                let s = match p.scheme {
+                    ProjScheme::TwoD => "2d",
+                    ProjScheme::ThreeD => "3d",
+                    ProjScheme::Combination => "comb",
+                };
+                write!(f, "proj-{}-{c}-{s}", p.builder_name)
+            }
+            Method::Embree(EmbreeCall::One) => f.write_str("embree"),
+            Method::Embree(EmbreeCall::Eight) => f.write_str("embree8"),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every method prints a name that parses back to it.
+    #[test]
+    fn names_round_trip() {
+        let mut all = Method::all();
+        all.extend(Method::projections());
+        all.push(Method::Cast {
+            scheme: Scheme::Slcts2d { n: 7, m: 3 },
+        });
+        all.push(Method::Cast {
+            scheme: Scheme::Slcts1d { n: 9 },
+        });
+        for m in ["kd-paper", "kd-paper-rope", "embree", "embree8"] {
+            all.push(Method::parse(m).unwrap());
+        }
+        for m in all {
+            assert_eq!(Method::parse(&m.to_string()), Ok(m), "{m}");
+        }
+        assert_eq!(Method::projections().len(), 20);
+    }
+
+    /// Malformed names are refused with the list of names.
+    #[test]
+    fn bad_names_are_refused() {
+        for bad in [
+            "slcts2d:7",
+            "slcts2d:7x",
+            "slcts1d:",
+            "slcts1d:-2",
+            "slcts1d:1",
+            "hlcts2d:4x4",
+            "proj-tdbs-dummy-3d",
+            "proj-x-2d-2d",
+            "kdd",
+        ] {
+            let e = Method::parse(bad).unwrap_err();
+            assert!(
+                e.contains("rstar-reinsert") && e.contains("proj-BUILDER"),
+                "{bad}: {e}"
+            );
+        }
+    }
+}

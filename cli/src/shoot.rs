@@ -1,0 +1,160 @@
+//! What the renderer and the benchmark trace rays through: any built
+//! structure behind one small trait. Every coray structure comes in through
+//! the core's [`Accel`] contract ([`AccelShooter`]); the projection rig and
+//! Embree are the two others. The structure, and its traversal, is chosen
+//! once: each kind gets its own monomorphised loops.
+
+use coray::{Aabb, Accel, Hit, Ray, TraceStats};
+
+/// A structure rays are shot through, with the per-thread state its
+/// traversal needs (its stack).
+pub trait Shooter: Sync {
+    /// Per-thread state.
+    type Ctx;
+    /// Fresh state for one thread.
+    fn ctx(&self) -> Self::Ctx;
+    /// Closest hit.
+    fn intersect(&self, ray: &Ray, ctx: &mut Self::Ctx, st: &mut TraceStats) -> Hit;
+    /// Any hit. `light`: the light a shadow ray goes to, when known.
+    fn occluded(
+        &self,
+        ray: &Ray,
+        light: Option<usize>,
+        ctx: &mut Self::Ctx,
+        st: &mut TraceStats,
+    ) -> bool;
+    /// Closest hits of many rays (a packet or stream path where the
+    /// structure has one).
+    fn intersect_all(
+        &self,
+        rays: &[Ray],
+        out: &mut [Hit],
+        ctx: &mut Self::Ctx,
+        st: &mut TraceStats,
+    ) {
+        for (r, h) in rays.iter().zip(out.iter_mut()) {
+            *h = self.intersect(r, ctx, st);
+        }
+    }
+    /// Any hits of many rays (`lights[i]` the light of ray `i`, when known).
+    fn occluded_all(
+        &self,
+        rays: &[Ray],
+        lights: Option<&[usize]>,
+        out: &mut [bool],
+        ctx: &mut Self::Ctx,
+        st: &mut TraceStats,
+    ) {
+        for (i, (r, o)) in rays.iter().zip(out.iter_mut()).enumerate() {
+            *o = self.occluded(r, lights.map(|l| l[i]), ctx, st);
+        }
+    }
+    /// The scene's box (for the renderer's epsilon).
+    fn bounds(&self) -> Aabb;
+}
+
+/// Any coray structure with a chosen method.
+pub struct AccelShooter<A: Accel> {
+    /// The structure.
+    pub accel: A,
+    /// Its method.
+    pub method: A::Method,
+    /// Its scene's box.
+    pub bounds: Aabb,
+}
+
+impl<A: Accel + Sync> Shooter for AccelShooter<A>
+where
+    A::Method: Sync,
+{
+    type Ctx = Vec<A::StackItem>;
+
+    fn ctx(&self) -> Self::Ctx {
+        vec![A::StackItem::default(); self.accel.stack_len()]
+    }
+
+    #[inline]
+    fn intersect(&self, ray: &Ray, ctx: &mut Self::Ctx, st: &mut TraceStats) -> Hit {
+        self.accel
+            .intersect(ray, self.method, ctx, st)
+            .expect("a stack of stack_len()")
+    }
+
+    #[inline]
+    fn occluded(
+        &self,
+        ray: &Ray,
+        _: Option<usize>,
+        ctx: &mut Self::Ctx,
+        st: &mut TraceStats,
+    ) -> bool {
+        self.accel
+            .occluded(ray, self.method, ctx, st)
+            .expect("a stack of stack_len()")
+    }
+
+    fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+}
+
+/// Embree, one ray at a time or in packets of 8.
+#[cfg(feature = "embree")]
+pub struct EmbreeShooter<'a> {
+    /// The scene.
+    pub scene: &'a coray_embree::EmbreeScene,
+    /// `rtcIntersect8` / `rtcOccluded8` for arrays of rays.
+    pub packets: bool,
+    /// The scene's box.
+    pub bounds: Aabb,
+}
+
+#[cfg(feature = "embree")]
+impl Shooter for EmbreeShooter<'_> {
+    type Ctx = ();
+
+    fn ctx(&self) {}
+
+    fn intersect(&self, ray: &Ray, _: &mut (), st: &mut TraceStats) -> Hit {
+        st.rays += 1;
+        self.scene.intersect(ray)
+    }
+
+    fn occluded(&self, ray: &Ray, _: Option<usize>, _: &mut (), st: &mut TraceStats) -> bool {
+        st.rays += 1;
+        self.scene.occluded(ray)
+    }
+
+    fn intersect_all(&self, rays: &[Ray], out: &mut [Hit], _: &mut (), st: &mut TraceStats) {
+        st.rays += rays.len() as u64;
+        if self.packets {
+            self.scene.intersect8(rays, out);
+        } else {
+            for (r, h) in rays.iter().zip(out.iter_mut()) {
+                *h = self.scene.intersect(r);
+            }
+        }
+    }
+
+    fn occluded_all(
+        &self,
+        rays: &[Ray],
+        _: Option<&[usize]>,
+        out: &mut [bool],
+        _: &mut (),
+        st: &mut TraceStats,
+    ) {
+        st.rays += rays.len() as u64;
+        if self.packets {
+            self.scene.occluded8(rays, out);
+        } else {
+            for (r, o) in rays.iter().zip(out.iter_mut()) {
+                *o = self.scene.occluded(r);
+            }
+        }
+    }
+
+    fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+}

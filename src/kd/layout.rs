@@ -1,0 +1,296 @@
+//! Byte layouts of kd-tree arenas: `[KdArenaHeader | nodes | leaves |
+//! ropes | refs]` for the tree, `[prim flags | events]` for a build's
+//! scratch. Counts in, bytes out, checked ([`crate::arena::Parts`]).
+
+use super::{KdEvent, KdInfo, KdLeaf, KdNode, KdRequirements, KdRopes, KD_MAGIC, KD_VERSION};
+use crate::arena::Parts;
+use crate::Error;
+use core::mem::size_of;
+
+/// Bytes reserved for the header at the start of a tree arena.
+pub const KD_HEADER_BYTES: usize = 128;
+
+/// Where each part of a kd-tree arena lies, in bytes from its start, and
+/// how many elements it holds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct KdArenaLayout {
+    /// Element counts.
+    pub counts: KdRequirements,
+    /// Offset of the nodes.
+    pub nodes_offset: usize,
+    /// Offset of the leaf records.
+    pub leaves_offset: usize,
+    /// Offset of the ropes.
+    pub ropes_offset: usize,
+    /// Offset of the references.
+    pub refs_offset: usize,
+    /// Bytes the layout covers.
+    pub total_bytes: usize,
+}
+
+impl KdArenaLayout {
+    /// Layout of the tree part (nodes, leaves, ropes, refs) of `counts`, or
+    /// `None` past [`crate::limits::MAX_ARENA_BYTES`].
+    pub fn of(counts: &KdRequirements) -> Option<KdArenaLayout> {
+        const _: () = assert!(size_of::<KdArenaHeader>() <= KD_HEADER_BYTES);
+        let mut p = Parts::after(KD_HEADER_BYTES);
+        let nodes_offset = p.push::<KdNode>(counts.nodes)?;
+        let leaves_offset = p.push::<KdLeaf>(counts.leaves)?;
+        let ropes_offset = p.push::<KdRopes>(counts.ropes)?;
+        let refs_offset = p.push::<u32>(counts.refs)?;
+        Some(KdArenaLayout {
+            counts: *counts,
+            nodes_offset,
+            leaves_offset,
+            ropes_offset,
+            refs_offset,
+            total_bytes: p.total()?,
+        })
+    }
+
+    /// The largest layout between `min` and `ideal` that fits in `bytes`, or
+    /// `None` when even `min` does not. Counts grow together, in 1024 steps
+    /// from `min` to `ideal`, so more bytes never give fewer elements.
+    pub fn fit(
+        bytes: usize,
+        min: &KdRequirements,
+        ideal: &KdRequirements,
+    ) -> Option<KdArenaLayout> {
+        let at = |k: usize| {
+            let lerp = |a: usize, b: usize| {
+                a + ((b.saturating_sub(a)) as u128 * k as u128 / 1024) as usize
+            };
+            let leaves = lerp(min.leaves, ideal.leaves);
+            KdArenaLayout::of(&KdRequirements {
+                nodes: lerp(min.nodes, ideal.nodes).min(2 * leaves - 1),
+                leaves,
+                ropes: leaves,
+                refs: lerp(min.refs, ideal.refs),
+                events: 0,
+                prim_flags: 0,
+            })
+        };
+        let fits = |k: usize| at(k).is_some_and(|l| l.total_bytes <= bytes);
+        if !fits(0) {
+            return None;
+        }
+        let (mut lo, mut hi) = (0usize, 1024usize);
+        while lo < hi {
+            let mid = (lo + hi).div_ceil(2);
+            if fits(mid) {
+                lo = mid;
+            } else {
+                hi = mid - 1;
+            }
+        }
+        at(lo)
+    }
+
+    /// Bytes of an arena holding exactly what a tree with `info` uses.
+    pub fn used_by(info: &KdInfo) -> Option<usize> {
+        let n = |x: u32| x as usize;
+        Some(
+            KdArenaLayout::of(&KdRequirements {
+                nodes: n(info.node_count),
+                leaves: n(info.leaf_count),
+                ropes: n(info.leaf_count),
+                refs: n(info.ref_count),
+                events: 0,
+                prim_flags: 0,
+            })?
+            .total_bytes,
+        )
+    }
+}
+
+/// Where the parts of a kd build's scratch arena lie: `[prim flags | events]`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct KdScratchLayout {
+    /// Bytes of primitive flags at offset 0.
+    pub prim_flags: usize,
+    /// Offset of the events.
+    pub events_offset: usize,
+    /// Events that fit.
+    pub events: usize,
+    /// Bytes the layout covers.
+    pub total_bytes: usize,
+}
+
+impl KdScratchLayout {
+    /// The layout holding `counts.prim_flags` flags and `counts.events` events.
+    pub fn of(counts: &KdRequirements) -> Option<KdScratchLayout> {
+        let mut p = Parts::after(0);
+        p.push::<u8>(counts.prim_flags)?;
+        let events_offset = p.push::<KdEvent>(counts.events)?;
+        Some(KdScratchLayout {
+            prim_flags: counts.prim_flags,
+            events_offset,
+            events: counts.events,
+            total_bytes: p.total()?,
+        })
+    }
+
+    /// The scratch layout of `bytes` bytes for `prim_count` primitives, or
+    /// `None` when it holds fewer than `min_events` events.
+    pub fn fit(bytes: usize, prim_count: usize, min_events: usize) -> Option<KdScratchLayout> {
+        let events_offset = crate::arena::align_up(prim_count)?;
+        let events = bytes.checked_sub(events_offset)? / size_of::<KdEvent>();
+        if events < min_events {
+            return None;
+        }
+        KdScratchLayout::of(&KdRequirements {
+            prim_flags: prim_count,
+            events,
+            ..KdRequirements::default()
+        })
+    }
+}
+
+/// The header at the start of a kd-tree arena: the tree's [`KdInfo`] and
+/// where its parts lie. Offsets, never pointers: the arena is relocatable.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C)]
+pub struct KdArenaHeader {
+    /// Counts, bounds, scene fingerprint, magic and version.
+    pub info: KdInfo,
+    /// Bytes of the arena the layout covers.
+    pub layout_bytes: u32,
+    /// Capacity of the node part.
+    pub nodes_cap: u32,
+    /// Capacity of the leaf and rope parts.
+    pub leaves_cap: u32,
+    /// Capacity of the reference part.
+    pub refs_cap: u32,
+    /// Byte offset of the nodes.
+    pub nodes_offset: u32,
+    /// Byte offset of the leaf records.
+    pub leaves_offset: u32,
+    /// Byte offset of the ropes.
+    pub ropes_offset: u32,
+    /// Byte offset of the references.
+    pub refs_offset: u32,
+}
+
+impl KdArenaHeader {
+    /// The header describing `layout` for a tree with `info`.
+    pub fn new(info: KdInfo, layout: &KdArenaLayout) -> KdArenaHeader {
+        let c = &layout.counts;
+        // Every value below fits: layouts stop at MAX_ARENA_BYTES = u32::MAX.
+        KdArenaHeader {
+            info,
+            layout_bytes: layout.total_bytes as u32,
+            nodes_cap: c.nodes as u32,
+            leaves_cap: c.leaves as u32,
+            refs_cap: c.refs as u32,
+            nodes_offset: layout.nodes_offset as u32,
+            leaves_offset: layout.leaves_offset as u32,
+            ropes_offset: layout.ropes_offset as u32,
+            refs_offset: layout.refs_offset as u32,
+        }
+    }
+
+    /// The layout this header claims, if it is the one the formulas give
+    /// for its capacities, fits in `arena_bytes`, and the counts in its
+    /// info fit the capacities. O(1): the tree itself is checked by
+    /// [`super::KdTree::validate`].
+    pub fn layout(&self, arena_bytes: usize) -> Result<KdArenaLayout, Error> {
+        let corrupt = |what| Err(Error::Corrupt { what });
+        if self.info.magic != KD_MAGIC {
+            return corrupt("magic");
+        }
+        if self.info.version != KD_VERSION {
+            return corrupt("version");
+        }
+        let counts = KdRequirements {
+            nodes: self.nodes_cap as usize,
+            leaves: self.leaves_cap as usize,
+            ropes: self.leaves_cap as usize,
+            refs: self.refs_cap as usize,
+            events: 0,
+            prim_flags: 0,
+        };
+        let Some(layout) = KdArenaLayout::of(&counts) else {
+            return corrupt("layout");
+        };
+        if KdArenaHeader::new(self.info, &layout) != *self {
+            return corrupt("layout");
+        }
+        if layout.total_bytes > arena_bytes {
+            return corrupt("arena shorter than its layout");
+        }
+        let i = &self.info;
+        if i.node_count > self.nodes_cap
+            || i.leaf_count > self.leaves_cap
+            || i.ref_count > self.refs_cap
+        {
+            return corrupt("counts");
+        }
+        Ok(layout)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn counts(nodes: usize, leaves: usize, refs: usize) -> KdRequirements {
+        KdRequirements {
+            nodes,
+            leaves,
+            ropes: leaves,
+            refs,
+            events: 0,
+            prim_flags: 0,
+        }
+    }
+
+    #[test]
+    fn parts_follow_the_header_aligned() {
+        let l = KdArenaLayout::of(&counts(3, 2, 5)).unwrap();
+        assert_eq!(l.nodes_offset, KD_HEADER_BYTES);
+        assert_eq!(l.leaves_offset, KD_HEADER_BYTES + 32);
+        assert_eq!(l.ropes_offset, l.leaves_offset + 16);
+        assert_eq!(l.refs_offset, l.ropes_offset + 96);
+        assert_eq!(l.total_bytes, l.refs_offset + 32);
+        assert!([
+            l.leaves_offset,
+            l.ropes_offset,
+            l.refs_offset,
+            l.total_bytes
+        ]
+        .iter()
+        .all(|o| o % 16 == 0));
+    }
+
+    #[test]
+    fn counts_near_the_limit_give_no_layout() {
+        // Issue 16: 0x2000_0001 node slots wrapped to a 224-byte layout on 32 bits.
+        assert!(KdArenaLayout::of(&counts(0x2000_0001, 1, 1)).is_none());
+        assert!(KdArenaLayout::of(&counts(1, usize::MAX / 8, 1)).is_none());
+        assert!(KdArenaLayout::of(&counts(1, 1, usize::MAX)).is_none());
+        let h = KdArenaHeader {
+            nodes_cap: 0x2000_0001,
+            info: KdInfo {
+                magic: KD_MAGIC,
+                version: KD_VERSION,
+                ..KdInfo::default()
+            },
+            ..KdArenaHeader::default()
+        };
+        assert!(h.layout(usize::MAX).is_err());
+    }
+
+    #[test]
+    fn fit_never_gives_fewer_elements_for_more_bytes() {
+        let (min, ideal) = (counts(1, 1, 100), counts(799, 400, 400));
+        let mut last = 0;
+        for bytes in (0..12_000).step_by(97) {
+            if let Some(l) = KdArenaLayout::fit(bytes, &min, &ideal) {
+                assert!(l.total_bytes <= bytes);
+                assert!(l.counts.refs >= last);
+                last = l.counts.refs;
+            }
+        }
+        assert!(KdArenaLayout::fit(0, &min, &ideal).is_none());
+    }
+}
