@@ -26,7 +26,7 @@
 #define CORAY_ARENA_ALIGN 16
 
 // Bytes of the traversal stack every kd-tree trace and cast takes.
-#define CORAY_KDTREE_STACK_BYTES 2480
+#define CORAY_KDTREE_STACK_BYTES 4608
 
 // Status of every entry point. Numbers are fixed forever; docs/c-api.md
 // says which situations give which status.
@@ -374,8 +374,9 @@ typedef struct CorayKdTreeInfo {
   float bounds_max[3];
 } CorayKdTreeInfo;
 
-// How a ray walks a kd-tree: `CORAY_TRAVERSAL_HIERARCHICAL` or
-// `CORAY_TRAVERSAL_ROPES` (the same hits).
+// How rays walk a kd-tree: `CORAY_TRAVERSAL_HIERARCHICAL`,
+// `CORAY_TRAVERSAL_ROPES` or `CORAY_TRAVERSAL_PACKETS` (all give the same
+// hits).
 typedef uint32_t CorayTraversal;
 
 // A projection: `CORAY_PLANE_PERSPECTIVE` or `CORAY_PLANE_ORTHOGRAPHIC`.
@@ -523,6 +524,12 @@ typedef uint32_t CorayProjScheme;
 
 // Leaf to leaf by ropes.
 #define CORAY_TRAVERSAL_ROPES 1
+
+// Array calls trace groups of 8 consecutive rays that move alike (a tile
+// of camera rays, shadow rays from a tile towards one light) as one
+// packet, testing each primitive against 8 rays at once; other groups
+// and one-ray calls are traced hierarchically.
+#define CORAY_TRAVERSAL_PACKETS 2
 
 // The primitives' rectangles on the plane.
 #define CORAY_PROJ_CRITERIA_2D 0

@@ -1,15 +1,24 @@
 #!/usr/bin/env bash
 # Runs every test of coray: Rust unit and integration tests, the C programs
 # (API contract, allocation counting, canaries, threads, the bare no-std
-# library, the Embree cross-check) and the header drift check.
+# library, the Embree cross-check, each under ASan/UBSan and valgrind),
+# the fuzz corpus replay and the header drift check.
 # On a fresh Debian machine it installs what it needs (as root).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-if [ ! -f /usr/include/embree3/rtcore.h ]; then
-    echo "installing libembree-dev (Embree 3, the cross-check reference)"
+# Debian packages the tests need: Embree 3 (the cross-check reference),
+# valgrind (memcheck and helgrind over the C programs), cmake (the
+# installed package's find_package test).
+need=()
+[ -f /usr/include/embree3/rtcore.h ] || need+=(libembree-dev)
+command -v valgrind >/dev/null || need+=(valgrind)
+command -v cmake >/dev/null || need+=(cmake)
+command -v pkg-config >/dev/null || need+=(pkg-config)
+if [ ${#need[@]} -gt 0 ]; then
+    echo "installing ${need[*]}"
     apt-get update -qq
-    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libembree-dev
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${need[@]}"
 fi
 for tool in cc c++ nm; do
     command -v "$tool" >/dev/null || { echo "missing $tool"; exit 1; }

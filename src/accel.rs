@@ -156,6 +156,46 @@ impl Accel for KdTree<'_> {
             depth: s.depth,
         })
     }
+
+    /// With [`Traversal::Packets`], packets of 8 where the rays move alike.
+    fn intersect_many(
+        &self,
+        rays: &[Ray],
+        hits: &mut [Hit],
+        method: Traversal,
+        stack: &mut [KdStackItem],
+        stats: &mut TraceStats,
+    ) -> Result<(), Error> {
+        check_lengths(rays.len(), hits.len(), stack.len(), KD_STACK_LEN)?;
+        if method == Traversal::Packets {
+            self.intersect_packets(rays, hits, stack, stats);
+        } else {
+            for (r, h) in rays.iter().zip(hits.iter_mut()) {
+                *h = KdTree::intersect(self, r, method, stack, stats);
+            }
+        }
+        Ok(())
+    }
+
+    /// With [`Traversal::Packets`], packets of 8 where the rays move alike.
+    fn occluded_many(
+        &self,
+        rays: &[Ray],
+        out: &mut [bool],
+        method: Traversal,
+        stack: &mut [KdStackItem],
+        stats: &mut TraceStats,
+    ) -> Result<(), Error> {
+        check_lengths(rays.len(), out.len(), stack.len(), KD_STACK_LEN)?;
+        if method == Traversal::Packets {
+            self.occluded_packets(rays, out, stack, stats);
+        } else {
+            for (r, o) in rays.iter().zip(out.iter_mut()) {
+                *o = KdTree::occluded(self, r, method, stack, stats);
+            }
+        }
+        Ok(())
+    }
 }
 
 fn bvh_shape(s: crate::bvh::BvhTreeStats) -> Shape {

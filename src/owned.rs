@@ -250,6 +250,11 @@ impl OwnedBvh {
     pub fn parts_mut(&mut self) -> (&mut [BvhNode], &mut [u32], &mut BvhInfo) {
         (&mut self.nodes, &mut self.refs, &mut self.info)
     }
+
+    /// An R-tree's state (free lists, counts, digest), to corrupt in tests.
+    pub fn rtree_state_mut(&mut self) -> &mut bvh::RTreeState {
+        &mut self.rtree
+    }
 }
 
 /// A projection build's scratch: the builder's boxes, keys, links and

@@ -489,3 +489,93 @@ fn hit_just_outside_the_scene_box_past_a_split() {
         }
     }
 }
+
+/// The small scene of the fuzzer's harness (ffi/harness): a floor at
+/// y = 0, triangles, spheres and cones over it.
+fn harness_scene() -> OwnedScene {
+    let vertices = vec![
+        [-4., 0., -4.],
+        [4., 0., -4.],
+        [4., 0., 4.],
+        [-4., 0., 4.],
+        [-1., 1., -1.],
+        [1., 1., -1.],
+        [0., 2.5, 0.],
+        [1.5, 0.5, 1.5],
+        [2.5, 0.5, 1.5],
+        [2., 1.5, 2.],
+    ];
+    let triangles = vec![[0u32, 1, 2], [0, 2, 3], [4, 5, 6], [7, 8, 9], [4, 6, 9]];
+    let sp = |center: [f32; 3], radius: f32| Sphere { center, radius };
+    OwnedScene {
+        vertices,
+        triangles,
+        spheres: vec![
+            sp([0., 1., 2.], 0.7),
+            sp([-2., 0.5, -2.], 0.5),
+            sp([2.5, 2., -1.], 0.4),
+        ],
+        cones: vec![
+            Cone {
+                base: [-2.5, 0., 2.],
+                base_radius: 0.4,
+                apex: [-2.5, 2., 2.],
+                apex_radius: 0.1,
+            },
+            Cone {
+                base: [2.5, 0., -2.5],
+                base_radius: 0.3,
+                apex: [2.5, 1.5, -2.5],
+                apex_radius: 0.3,
+            },
+        ],
+    }
+}
+
+/// Rays the C-ABI fuzzer found where rope traversal missed the floor that
+/// hierarchical traversal hits: a segment starting before its origin on
+/// the floor's plane with a direction so small that the start point
+/// rounds back onto the plane (ropes must enter the leaf the segment
+/// starts in), and a ray from 10^22 away, whose points no f32 can place
+/// in a scene of size 8 (ropes hand it to hierarchical traversal).
+#[test]
+fn ropes_answer_as_hierarchical_traversal_at_the_edges_of_f32() {
+    let s = harness_scene();
+    let sc = s.scene();
+    let kd = coray::owned::OwnedKd::new(&sc, &KdParams::auto()).unwrap();
+    let t = kd.tree(sc).unwrap();
+    let rays = [
+        Ray::new(
+            Vec3::new(2.177_005_3e-38, 0.0, 0.0),
+            Vec3::new(9.674_053e-38, -8.423_165e-28, 5.907_828e-39),
+            -2.499_156_1e-19,
+            5.207_425_7e-30,
+        ),
+        Ray::new(
+            Vec3::new(2.387_878_1e-9, 6.383_869_6e22, -7.757_889e-8),
+            Vec3::new(1.174_659_6e-22, 3_258_263_600.0, 0.0),
+            -2.066_542_6e24,
+            0.0,
+        ),
+    ];
+    let (mut k, mut st) = (kst(), TraceStats::default());
+    for (i, r) in rays.iter().enumerate() {
+        let h = t.intersect(r, Traversal::Hierarchical, &mut k, &mut st);
+        if i == 0 {
+            // From a point of the floor: the floor at t = 0.
+            assert!(h.is_hit() && h.prim_id == 0, "{r:?} {h:?}");
+        }
+        // (The second ray's segment through the scene is one f32 value of
+        // t: which primitives it meets is rounding. The traversals must
+        // still agree.)
+        assert_eq!(
+            t.intersect(r, Traversal::Ropes, &mut k, &mut st),
+            h,
+            "{r:?}"
+        );
+        assert_eq!(
+            t.occluded(r, Traversal::Ropes, &mut k, &mut st),
+            t.occluded(r, Traversal::Hierarchical, &mut k, &mut st)
+        );
+    }
+}

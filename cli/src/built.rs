@@ -117,6 +117,10 @@ impl<'s> Built<'s> {
     /// Does `v` with this structure's shooter.
     pub fn visit<V: Visit>(&self, v: V) -> V::Out {
         match &self.inner {
+            Inner::Kd(o, Traversal::Packets) => v.visit(&crate::shoot::KdPacketShooter {
+                tree: o.tree(self.scene).expect("just built"),
+                bounds: self.bounds,
+            }),
             Inner::Kd(o, traversal) => v.visit(&AccelShooter {
                 accel: o.tree(self.scene).expect("just built"),
                 method: *traversal,

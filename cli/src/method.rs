@@ -123,6 +123,7 @@ impl Method {
         let mut v = vec![
             Method::kd(Traversal::Hierarchical),
             Method::kd(Traversal::Ropes),
+            Method::kd(Traversal::Packets),
         ];
         v.extend(Method::casts());
         v.extend(
@@ -195,7 +196,7 @@ impl Method {
     pub fn help() -> String {
         let names: Vec<String> = Method::all().iter().map(|m| m.to_string()).collect();
         format!(
-            "{}, kd-paper, kd-paper-rope, slcts1d:N, slcts2d:NxM, and \
+            "{}, kd-paper, kd-paper-rope, kd-paper-packet, slcts1d:N, slcts2d:NxM, and \
              proj-BUILDER-CRITERIA-SCHEME (BUILDER {}, CRITERIA 2d|dummy, SCHEME 2d|3d|comb)",
             names.join(", "),
             PROJ_BUILDERS.join("|")
@@ -217,6 +218,9 @@ impl Method {
             "kd-paper-rope" => return kd(Some(Preset::Paper), Traversal::Ropes),
             "kd-auto" => return kd(Some(Preset::Auto), Traversal::Hierarchical),
             "kd-auto-rope" => return kd(Some(Preset::Auto), Traversal::Ropes),
+            "kd-packet" => return kd(None, Traversal::Packets),
+            "kd-paper-packet" => return kd(Some(Preset::Paper), Traversal::Packets),
+            "kd-auto-packet" => return kd(Some(Preset::Auto), Traversal::Packets),
             "slcts1d" => return cast(Scheme::Slcts1d { n: 5 }),
             "slcts2d" => return cast(Scheme::Slcts2d { n: 5, m: 5 }),
             "hlcts1d" => return cast(Scheme::Hlcts1d),
@@ -299,10 +303,10 @@ impl fmt::Display for Method {
                     Some(Preset::Auto) => "-auto",
                     Some(Preset::Paper) => "-paper",
                 };
-                let t = if traversal == Traversal::Ropes {
-                    "-rope"
-                } else {
-                    ""
+                let t = match traversal {
+                    Traversal::Hierarchical => "",
+                    Traversal::Ropes => "-rope",
+                    Traversal::Packets => "-packet",
                 };
                 write!(f, "kd{p}{t}")
             }
@@ -350,7 +354,13 @@ mod tests {
         all.push(Method::Cast {
             scheme: Scheme::Slcts1d { n: 9 },
         });
-        for m in ["kd-paper", "kd-paper-rope", "embree", "embree8"] {
+        for m in [
+            "kd-paper",
+            "kd-paper-rope",
+            "kd-paper-packet",
+            "embree",
+            "embree8",
+        ] {
             all.push(Method::parse(m).unwrap());
         }
         for m in all {

@@ -93,6 +93,92 @@ where
             .expect("a stack of stack_len()")
     }
 
+    /// The structure's own array path (packets, for a kd-tree's
+    /// `Traversal::Packets`).
+    fn intersect_all(
+        &self,
+        rays: &[Ray],
+        out: &mut [Hit],
+        ctx: &mut Self::Ctx,
+        st: &mut TraceStats,
+    ) {
+        self.accel
+            .intersect_many(rays, out, self.method, ctx, st)
+            .expect("a stack of stack_len()");
+    }
+
+    fn occluded_all(
+        &self,
+        rays: &[Ray],
+        _: Option<&[usize]>,
+        out: &mut [bool],
+        ctx: &mut Self::Ctx,
+        st: &mut TraceStats,
+    ) {
+        self.accel
+            .occluded_many(rays, out, self.method, ctx, st)
+            .expect("a stack of stack_len()");
+    }
+
+    fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+}
+
+/// A kd-tree tracing arrays in packets of 8 with the widest kernel the
+/// CPU runs (AVX2 or the baseline, chosen by coray-ffi); one ray alone
+/// hierarchically.
+pub struct KdPacketShooter<'a> {
+    /// The tree.
+    pub tree: coray::kd::KdTree<'a>,
+    /// Its scene's box.
+    pub bounds: Aabb,
+}
+
+impl Shooter for KdPacketShooter<'_> {
+    type Ctx = Vec<coray::kd::KdStackItem>;
+
+    fn ctx(&self) -> Self::Ctx {
+        coray::owned::stack(coray::kd::KD_STACK_LEN)
+    }
+
+    fn intersect(&self, ray: &Ray, ctx: &mut Self::Ctx, st: &mut TraceStats) -> Hit {
+        self.tree
+            .intersect(ray, coray::kd::Traversal::Hierarchical, ctx, st)
+    }
+
+    fn occluded(
+        &self,
+        ray: &Ray,
+        _: Option<usize>,
+        ctx: &mut Self::Ctx,
+        st: &mut TraceStats,
+    ) -> bool {
+        self.tree
+            .occluded(ray, coray::kd::Traversal::Hierarchical, ctx, st)
+    }
+
+    fn intersect_all(
+        &self,
+        rays: &[Ray],
+        out: &mut [Hit],
+        ctx: &mut Self::Ctx,
+        st: &mut TraceStats,
+    ) {
+        coray_ffi::simd::intersect_packets(&self.tree, rays, out, ctx, st);
+    }
+
+    fn occluded_all(
+        &self,
+        rays: &[Ray],
+        _: Option<&[usize]>,
+        out: &mut [bool],
+        ctx: &mut Self::Ctx,
+        st: &mut TraceStats,
+    ) {
+        coray_ffi::simd::occluded_packets(&self.tree, rays, out, ctx, st);
+    }
+
     fn bounds(&self) -> Aabb {
         self.bounds
     }

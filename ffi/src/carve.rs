@@ -58,7 +58,7 @@ const _: () = {
     assert!(size_of::<KdLeaf>() == 8);
     assert!(size_of::<KdRopes>() == 48);
     assert!(size_of::<KdEvent>() == 8);
-    assert!(size_of::<KdStackItem>() == 20 && align_of::<KdStackItem>() == 4);
+    assert!(size_of::<KdStackItem>() == 8 && align_of::<KdStackItem>() == 4);
     assert!(size_of::<layout::KdArenaHeader>() == 108);
     assert!(size_of::<coray::Sphere>() == 16 && align_of::<coray::Sphere>() == 4);
     assert!(size_of::<coray::Cone>() == 32 && align_of::<coray::Cone>() == 4);

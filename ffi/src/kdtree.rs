@@ -7,9 +7,9 @@ use crate::carve::{self, check_arena, Out, OutValue, Regions, Versioned};
 use crate::handle::{self, Handle, KIND_KD};
 use crate::{guard, CorayKdTree, CorayStatus};
 use coray::kd::layout::{KdArenaHeader, KdArenaLayout, KdScratchLayout, KD_HEADER_BYTES};
-use coray::kd::{self, KdStackItem, KdTree, Traversal, KD_STACK_LEN};
+use coray::kd::{self, KdStackItem, KdTree, Traversal, KD_STACK_LEN, PACKET_LANES};
 use coray::limits::MAX_PRIMS;
-use coray::{Accel, TraceStats};
+use coray::{Accel, Hit, TraceStats, Vec3};
 use core::ffi::c_void;
 use core::mem::size_of;
 
@@ -20,16 +20,22 @@ pub const CORAY_KD_PRESET_AUTO: CorayKdPreset = 0;
 /// The LCTS paper's settings: depth 16, leaves of at most 2 objects.
 pub const CORAY_KD_PRESET_PAPER: CorayKdPreset = 1;
 
-/// How a ray walks a kd-tree: `CORAY_TRAVERSAL_HIERARCHICAL` or
-/// `CORAY_TRAVERSAL_ROPES` (the same hits).
+/// How rays walk a kd-tree: `CORAY_TRAVERSAL_HIERARCHICAL`,
+/// `CORAY_TRAVERSAL_ROPES` or `CORAY_TRAVERSAL_PACKETS` (all give the same
+/// hits).
 pub type CorayTraversal = u32;
 /// Stack traversal (Havran's TA_B^rec).
 pub const CORAY_TRAVERSAL_HIERARCHICAL: CorayTraversal = 0;
 /// Leaf to leaf by ropes.
 pub const CORAY_TRAVERSAL_ROPES: CorayTraversal = 1;
+/// Array calls trace groups of 8 consecutive rays that move alike (a tile
+/// of camera rays, shadow rays from a tile towards one light) as one
+/// packet, testing each primitive against 8 rays at once; other groups
+/// and one-ray calls are traced hierarchically.
+pub const CORAY_TRAVERSAL_PACKETS: CorayTraversal = 2;
 
 /// Bytes of the traversal stack every kd-tree trace and cast takes.
-pub const CORAY_KDTREE_STACK_BYTES: usize = 2480;
+pub const CORAY_KDTREE_STACK_BYTES: usize = 4608;
 const _: () = assert!(CORAY_KDTREE_STACK_BYTES == KD_STACK_LEN * size_of::<KdStackItem>());
 
 /// Parameters of a kd-tree build. Get them from `coray_kdtree_params_default`.
@@ -146,6 +152,7 @@ fn traversal(t: CorayTraversal) -> Result<Traversal, CorayStatus> {
     match t {
         CORAY_TRAVERSAL_HIERARCHICAL => Ok(Traversal::Hierarchical),
         CORAY_TRAVERSAL_ROPES => Ok(Traversal::Ropes),
+        CORAY_TRAVERSAL_PACKETS => Ok(Traversal::Packets),
         _ => Err(CorayStatus::InvalidParameter),
     }
 }
@@ -488,7 +495,14 @@ unsafe fn batch<O>(
     stack: *mut c_void,
     stack_bytes: usize,
     stats: *mut CorayTraceStats,
-    answer: impl Fn(&KdTree, &coray::Ray, Traversal, &mut [KdStackItem], &mut TraceStats) -> O,
+    answer: impl Fn(
+        &KdTree,
+        &[coray::Ray],
+        &mut [O],
+        Traversal,
+        &mut [KdStackItem],
+        &mut TraceStats,
+    ) -> Result<(), coray::Error>,
 ) -> CorayStatus {
     guard(|| {
         let method = traversal(method)?;
@@ -506,8 +520,14 @@ unsafe fn batch<O>(
         };
         regions.check()?;
         let mut st = TraceStats::default();
-        for (r, o) in rays.iter().zip(out.iter_mut()) {
-            *o = answer(&t, &r.into(), method, stk, &mut st);
+        // Groups of 8: what a packet takes (the other traversals trace
+        // them ray by ray).
+        let mut group = [coray::Ray::new(Vec3::ZERO, Vec3::ZERO, 0.0, 0.0); PACKET_LANES];
+        for (rs, os) in rays.chunks(PACKET_LANES).zip(out.chunks_mut(PACKET_LANES)) {
+            for (g, r) in group.iter_mut().zip(rs) {
+                *g = r.into();
+            }
+            answer(&t, &group[..rs.len()], os, method, stk, &mut st)?;
         }
         if st.faults > 0 {
             return Err(CorayStatus::CorruptArena);
@@ -547,7 +567,19 @@ pub unsafe extern "C" fn coray_kdtree_intersect(
             stack,
             stack_bytes,
             stats,
-            |t, r, m, s, st| t.intersect(r, m, s, st).into(),
+            |t, rays, out, m, s, st| {
+                let mut hits = [Hit::MISS; PACKET_LANES];
+                let hits = &mut hits[..rays.len()];
+                if m == Traversal::Packets {
+                    crate::simd::intersect_packets(t, rays, hits, s, st);
+                } else {
+                    Accel::intersect_many(t, rays, hits, m, s, st)?;
+                }
+                for (o, h) in out.iter_mut().zip(hits.iter()) {
+                    *o = (*h).into();
+                }
+                Ok(())
+            },
         )
     }
 }
@@ -599,7 +631,19 @@ pub unsafe extern "C" fn coray_kdtree_occluded(
             stack,
             stack_bytes,
             stats,
-            |t, r, m, s, st| t.occluded(r, m, s, st) as u8,
+            |t, rays, out, m, s, st| {
+                let mut occ = [false; PACKET_LANES];
+                let occ = &mut occ[..rays.len()];
+                if m == Traversal::Packets {
+                    crate::simd::occluded_packets(t, rays, occ, s, st);
+                } else {
+                    Accel::occluded_many(t, rays, occ, m, s, st)?;
+                }
+                for (o, b) in out.iter_mut().zip(occ.iter()) {
+                    *o = *b as u8;
+                }
+                Ok(())
+            },
         )
     }
 }

@@ -27,6 +27,7 @@ mod cast;
 mod handle;
 mod kdtree;
 mod proj;
+pub mod simd;
 
 pub use abi::*;
 pub use bvh::*;

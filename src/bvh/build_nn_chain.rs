@@ -238,6 +238,13 @@ pub(crate) fn build<'a>(
             )
         };
         index.nearest(x, prev, 0, 0, n, &mut best);
+        if best.1 == NONE {
+            // Every joint area with x is infinite (coordinates near
+            // f32::MAX), and the search prunes those: x joins the first
+            // other live cluster. Rare, so the scan's cost does not matter.
+            let other = (0..n).find(|&k| k != x && !index.clusters[k].bounds().is_empty());
+            best.1 = other.map_or(NONE, |k| k as u32);
+        }
         let y = best.1;
         if y != prev {
             chain[len] = y;

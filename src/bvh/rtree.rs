@@ -190,6 +190,11 @@ pub fn validate_rtree(
     {
         return corrupt("counts disagree with the state");
     }
+    // The digest updates carry on: it must be the one validate just
+    // checked against the references.
+    if st.ref_digest != i.ref_digest {
+        return corrupt("the state's reference digest");
+    }
     Ok(stats)
 }
 
@@ -240,7 +245,13 @@ fn margin(b: &Aabb) -> f32 {
 }
 
 fn enlarged(b: &Aabb, add: &Aabb) -> f32 {
-    b.union(add).area() - b.area()
+    finite_area(&b.union(add)) - finite_area(b)
+}
+
+/// A box's area, f32::MAX where it overflows: boxes near f32::MAX keep
+/// comparable (finite) enlargements instead of `inf - inf`.
+fn finite_area(b: &Aabb) -> f32 {
+    b.area().min(f32::MAX)
 }
 
 fn morton(c: crate::Vec3, lo: crate::Vec3, hi: crate::Vec3) -> u32 {
@@ -1146,7 +1157,7 @@ fn quadratic_split(e: &[Entry], m: usize) -> [bool; MAX_CHILDREN as usize + 1] {
             if !done[i] {
                 let b = e[i].bounds();
                 let p = (enlarged(&g1, &b) - enlarged(&g2, &b)).abs();
-                if p > pref {
+                if p > pref || pick == usize::MAX {
                     (pick, pref) = (i, p);
                 }
             }

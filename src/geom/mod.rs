@@ -3,6 +3,7 @@
 mod aabb;
 mod camera;
 mod cone;
+pub mod lanes;
 mod ray;
 mod scene;
 mod sphere;

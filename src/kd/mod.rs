@@ -12,6 +12,7 @@
 mod build;
 pub mod layout;
 mod node;
+mod packet;
 mod ropes;
 pub(crate) mod traverse;
 mod validate;
@@ -21,6 +22,7 @@ pub use node::{
     KdInfo, KdLeaf, KdNode, KdRopes, KdStackItem, KD_FLAG_TRUNCATED, KD_MAGIC, KD_MAX_DEPTH,
     KD_STACK_LEN, KD_VERSION, NO_NODE,
 };
+pub use packet::LANES as PACKET_LANES;
 pub use traverse::{Decision, Traversal};
 pub use validate::KdTreeStats;
 

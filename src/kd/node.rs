@@ -11,22 +11,23 @@ pub const NO_NODE: u32 = u32::MAX;
 
 pub use crate::limits::KD_MAX_DEPTH;
 
-/// Entries of the stack every kd traversal takes ([`KdStackItem`]s): two
-/// exit points per level of the deepest tree, and a few to spare.
-pub const KD_STACK_LEN: usize = 2 * KD_MAX_DEPTH as usize + 4;
+/// Entries of the stack every kd traversal takes ([`KdStackItem`]s): for a
+/// packet of 8 rays, one entry of 9 items (node, lanes, 8 entry and 8
+/// exit distances) per level of the deepest tree and a few to spare; a
+/// single ray uses the first 2 per level.
+pub const KD_STACK_LEN: usize = 9 * (KD_MAX_DEPTH as usize + 4);
 
 /// One entry of a kd traversal stack: an exit point of TA_B^rec, the node
-/// to visit after the current segment, the signed distance and the point
-/// where that segment ends. Plain data: the caller owns the stack.
+/// to visit after the current segment and the ray parameter where that
+/// segment ends (and the next node's begins). Plain data: the caller owns
+/// the stack.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[repr(C)]
 pub struct KdStackItem {
     /// Node to visit next.
     pub node: u32,
-    /// Distance where the segment ends.
+    /// Ray parameter where the current segment ends.
     pub t: f32,
-    /// Point where the segment ends.
-    pub p: [f32; 3],
 }
 
 /// One node in 8 bytes. `word & 3` is the split axis (0, 1, 2) or 3 for a

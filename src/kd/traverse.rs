@@ -20,6 +20,11 @@ pub enum Traversal {
     /// that lies exactly in a split plane it must cross falls back to
     /// hierarchical traversal (both sides of the plane hold its hits).
     Ropes,
+    /// Arrays of rays in packets of 8 ([`KdTree::intersect_packets`]):
+    /// each group of 8 consecutive rays that move alike walks the tree
+    /// once, its primitives tested 8 rays at a time; the hits are the
+    /// hierarchical traversal's. One ray alone is traced hierarchically.
+    Packets,
 }
 
 /// What happens at a leaf: test its primitives; return true to stop.
@@ -189,6 +194,10 @@ pub(crate) enum RopeEnd {
     Fallback,
 }
 
+/// How far (in multiples of the scene's coordinate scale) a ray's points
+/// may lie for rope traversal: see [`KdTree::points_precise`].
+pub(crate) const ROPE_REACH: f32 = 256.0;
+
 /// Marks an exit point pushed only to end a segment that is then
 /// restarted (a ray lying in a split plane visits both children).
 const SKIP: u32 = NO_NODE - 1;
@@ -216,7 +225,7 @@ impl<'a> KdTree<'a> {
         let mut v = Closest::new(ray);
         let mut steps = Steps::default();
         match method {
-            Traversal::Hierarchical => {
+            Traversal::Hierarchical | Traversal::Packets => {
                 self.walk_hierarchical(&mut v, &mut NoRecord, stack, &mut steps)
             }
             Traversal::Ropes => self.walk_ropes(&mut v, stack, &mut steps),
@@ -251,7 +260,7 @@ impl<'a> KdTree<'a> {
         };
         let mut steps = Steps::default();
         match method {
-            Traversal::Hierarchical => {
+            Traversal::Hierarchical | Traversal::Packets => {
                 self.walk_hierarchical(&mut v, &mut NoRecord, stack, &mut steps)
             }
             Traversal::Ropes => self.walk_ropes(&mut v, stack, &mut steps),
@@ -342,10 +351,9 @@ impl<'a> KdTree<'a> {
         stack[0] = KdStackItem {
             node: NO_NODE,
             t: t1,
-            p: r.at(t1).to_array(),
         };
         let mut ex = 0usize;
-        let mut en_p = r.at(t0);
+        let mut en_t = t0;
         let mut node = start;
         let mut budget = self.nodes.len();
         loop {
@@ -358,58 +366,54 @@ impl<'a> KdTree<'a> {
                 budget -= 1;
                 steps.interior += 1;
                 let (a, s, left) = (nd.axis(), nd.split(), nd.index());
-                let ex_pa = stack[ex].p[a];
-                let far;
-                if en_p[a] <= s {
-                    if ex_pa <= s {
-                        if en_p[a] == s && ex_pa == s {
-                            // The segment lies in the plane: left, then right again.
-                            rec.interior(node, Decision::LeftRight);
-                            let x = stack[ex];
-                            stack[ex + 1] = KdStackItem {
-                                node: left.wrapping_add(1),
-                                t: 0.0,
-                                p: en_p.to_array(),
-                            };
-                            stack[ex + 2] = KdStackItem { node: SKIP, ..x };
-                            ex += 2;
-                        } else {
-                            rec.interior(node, Decision::Left);
-                        }
-                        node = left;
-                        nd = self.node(node);
-                        continue;
-                    }
-                    if en_p[a] == s {
-                        rec.interior(node, Decision::Right);
-                        node = left.wrapping_add(1);
-                        nd = self.node(node);
-                        continue;
-                    }
+                let right = left.wrapping_add(1);
+                let ex_t = stack[ex].t;
+                // Where the ray meets the plane: the segment [en_t, ex_t]
+                // lies on one side of it, or crosses it there.
+                // A ray parallel to the plane stays on its origin's side
+                // (d = inf: the near side only), or lies in it (NaN).
+                let (o, da) = (r.origin[a], r.dir[a]);
+                let d = if da != 0.0 {
+                    (s - o) * r.inv_dir[a]
+                } else if o != s {
+                    f32::INFINITY
+                } else {
+                    f32::NAN
+                };
+                let up = da > 0.0 || (da == 0.0 && o < s);
+                let (near, far) = if up { (left, right) } else { (right, left) };
+                let (near_only, far_only, both) = if up {
+                    (Decision::Left, Decision::Right, Decision::LeftRight)
+                } else {
+                    (Decision::Right, Decision::Left, Decision::RightLeft)
+                };
+                if d >= ex_t {
+                    rec.interior(node, near_only);
+                    node = near;
+                } else if d <= en_t {
+                    rec.interior(node, far_only);
+                    node = far;
+                } else if d.is_nan() {
+                    // The segment lies in the plane (0 * inf): left, then
+                    // right again over the same segment.
                     rec.interior(node, Decision::LeftRight);
-                    far = left.wrapping_add(1);
+                    stack[ex + 1] = KdStackItem {
+                        node: right,
+                        t: en_t,
+                    };
+                    stack[ex + 2] = KdStackItem {
+                        node: SKIP,
+                        t: ex_t,
+                    };
+                    ex += 2;
                     node = left;
                 } else {
-                    if s < ex_pa {
-                        rec.interior(node, Decision::Right);
-                        node = left.wrapping_add(1);
-                        nd = self.node(node);
-                        continue;
-                    }
-                    rec.interior(node, Decision::RightLeft);
-                    far = left;
-                    node = left.wrapping_add(1);
+                    rec.interior(node, both);
+                    ex += 1;
+                    stack[ex] = KdStackItem { node: far, t: d };
+                    node = near;
                 }
                 nd = self.node(node);
-                let t = (s - r.origin[a]) * r.inv_dir[a];
-                let mut p = r.at(t);
-                p[a] = s;
-                ex += 1;
-                stack[ex] = KdStackItem {
-                    node: far,
-                    t,
-                    p: p.to_array(),
-                };
             }
             steps.leaves += 1;
             rec.leaf(node, nd.index());
@@ -434,7 +438,7 @@ impl<'a> KdTree<'a> {
                     return false;
                 }
                 ex -= 1;
-                en_p = Vec3::from(e.p);
+                en_t = e.t;
                 node = e.node;
                 if node != SKIP {
                     break;
@@ -468,6 +472,49 @@ impl<'a> KdTree<'a> {
             } else {
                 return None;
             };
+        }
+        Some(KdNode::FAULT)
+    }
+
+    /// Descends from `node` to the leaf holding the ray's point at `t`,
+    /// deciding each split by the ray parameter where the ray meets it
+    /// (the comparison hierarchical traversal makes), not by the point's
+    /// rounded coordinates: a point computed at a `t` before the origin
+    /// can round onto a plane the ray only reaches later. At the plane the
+    /// ray goes where it heads; `None` when it lies in the plane.
+    #[inline]
+    pub(crate) fn locate_at(
+        &self,
+        mut node: u32,
+        r: &PreparedRay,
+        t: f32,
+        steps: &mut Steps,
+    ) -> Option<KdNode> {
+        for _ in 0..=KD_MAX_DEPTH {
+            let nd = self.node(node);
+            if nd.is_leaf() {
+                return Some(nd);
+            }
+            steps.interior += 1;
+            let (a, s, left) = (nd.axis(), nd.split(), nd.index());
+            let (o, d) = (r.origin[a], r.dir[a]);
+            let below = if d == 0.0 {
+                if o == s {
+                    return None;
+                }
+                o < s
+            } else {
+                let ts = (s - o) * r.inv_dir[a];
+                if ts.is_nan() {
+                    // On the plane with a direction too small to invert.
+                    d < 0.0
+                } else if d > 0.0 {
+                    t < ts
+                } else {
+                    t >= ts
+                }
+            };
+            node = if below { left } else { left.wrapping_add(1) };
         }
         Some(KdNode::FAULT)
     }
@@ -568,6 +615,31 @@ impl<'a> KdTree<'a> {
         RopeEnd::Stopped
     }
 
+    /// Whether points of `r` between `t0` and `t1` are computed precisely
+    /// enough for rope steps, which find leaves by points on the ray: the
+    /// origin and the distance travelled within [`ROPE_REACH`] times the
+    /// scene's coordinate scale keep a point's rounding (a few ulps of
+    /// that size) below 2^-15 of the scene, far under the thinnest cells a
+    /// build makes ([`crate::tolerance::FACE_CELL`]). A ray from farther
+    /// away (found by the C-ABI fuzzer: an origin 10^22 from a scene of
+    /// size 8) is traversed hierarchically, by ray parameters alone.
+    #[inline]
+    fn points_precise(&self, r: &PreparedRay, t0: f32, t1: f32) -> bool {
+        let b = self.info.bounds();
+        let scale = b
+            .min
+            .abs()
+            .max(b.max.abs())
+            .max(b.max - b.min)
+            .max_element();
+        let reach = r
+            .origin
+            .abs()
+            .max(r.dir.abs() * t0.abs().max(t1.abs()))
+            .max_element();
+        reach <= scale * ROPE_REACH
+    }
+
     fn walk_ropes<V: LeafVisitor>(
         &self,
         v: &mut V,
@@ -578,7 +650,10 @@ impl<'a> KdTree<'a> {
         let Some((t0, t1)) = self.scene_segment(&r) else {
             return false;
         };
-        let end = match self.locate(0, r.at(t0), r.dir, steps) {
+        if !self.points_precise(&r, t0, t1) {
+            return self.walk_from(v, &mut NoRecord, stack, 0, t0, t1, steps);
+        }
+        let end = match self.locate_at(0, &r, t0, steps) {
             Some(first) => self.rope_walk(v, first, t1, steps),
             None => RopeEnd::Fallback,
         };

@@ -91,15 +91,18 @@ pub fn tile_order(width: u32, height: u32) -> Vec<usize> {
 }
 
 /// Shadow rays from every hit of `primary` to every light, each ending at
-/// its light; `t_min` clears the surface by 1e-4 of the distance.
+/// its light; `t_min` clears the surface by 1e-4 of the distance. Light
+/// by light, the hits in `primary`'s order: consecutive rays from
+/// neighbouring pixels towards one light, as a renderer batches them (and
+/// packets take them).
 pub fn shadow(mesh: &SceneMesh, primary: &[Ray], hits: &[Hit]) -> Rays {
     let (mut rays, mut lights, mut from) = (Vec::new(), Vec::new(), Vec::new());
-    for (px, (r, h)) in primary.iter().zip(hits).enumerate() {
-        if !h.is_hit() {
-            continue;
-        }
-        let p = r.origin + r.dir * h.t;
-        for (i, (l, _)) in mesh.lights.iter().enumerate() {
+    for (i, (l, _)) in mesh.lights.iter().enumerate() {
+        for (px, (r, h)) in primary.iter().zip(hits).enumerate() {
+            if !h.is_hit() {
+                continue;
+            }
+            let p = r.origin + r.dir * h.t;
             let d = *l - p;
             let len = d.length();
             if len > 0.0 {

@@ -21,7 +21,7 @@ use serde::Serialize;
 pub const INCOHERENT_RAYS: usize = 1_000_000;
 
 /// The coray methods traced ray by ray on every set.
-pub const RAY_METHODS: [&str; 3] = ["kd", "kd-rope", "tdbs-sah"];
+pub const RAY_METHODS: [&str; 4] = ["kd", "kd-rope", "kd-packet", "tdbs-sah"];
 
 /// The image casts timed on the primary set (one thread: a cast is one
 /// call over the camera's image).
@@ -157,9 +157,10 @@ pub fn run(
     for (k, &px) in order.iter().enumerate() {
         row_hits[px] = primary.hits[k];
     }
+    let shadow = rays::shadow(&s.mesh, &primary.rays.rays, &primary.hits);
     let sets = [
         primary,
-        reference(&tree, rays::shadow(&s.mesh, &row_major, &row_hits)),
+        reference(&tree, shadow),
         reference(&tree, rays::incoherent(&s.mesh, INCOHERENT_RAYS)),
         reference(&tree, rays::diffuse(&row_major, &row_hits)),
     ];

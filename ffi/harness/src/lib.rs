@@ -1,0 +1,841 @@
+//! The body of coray's C-ABI fuzz target (`fuzz/`), and of `cargo test`'s
+//! replay of its regression corpus (`fuzz/regressions/`).
+//!
+//! One input drives one structure family through every entry point it
+//! has: a small fixed scene (perturbed by the input when it asks) is built
+//! into an arena, the arena is then corrupted by the input (bytes flipped,
+//! replaced wholesale, or cut short), and the corrupted arena is opened,
+//! validated, traced, cast, queried for patch visibility, and for R-trees
+//! updated. What must hold, whatever the bytes:
+//!
+//! - no entry point panics (the std build would turn a panic into
+//!   `CORAY_STATUS_INTERNAL_ERROR`, which this harness treats as a crash);
+//! - nothing returns late (the fuzzer's timeout);
+//! - when validate says OK, every trace on that arena answers as the
+//!   clean build does (the same primitive and t, or a tie of two
+//!   primitives at one t), and an R-tree update on it keeps it valid.
+
+use coray::tolerance::near_tie;
+use coray_ffi::*;
+use core::ffi::c_void;
+use core::mem::size_of;
+
+/// Memory aligned for every arena, scratch and stack the ABI takes.
+#[repr(C, align(16))]
+#[derive(Clone, Copy)]
+struct Block([u8; 16]);
+
+fn blocks(bytes: usize) -> Vec<Block> {
+    vec![Block([0; 16]); bytes.div_ceil(16).max(1)]
+}
+
+fn as_bytes(b: &[Block]) -> Vec<u8> {
+    b.iter().flat_map(|x| x.0).collect()
+}
+
+fn from_bytes(bytes: &[u8]) -> Vec<Block> {
+    let mut b = blocks(bytes.len());
+    for (i, v) in bytes.iter().enumerate() {
+        b[i / 16].0[i % 16] = *v;
+    }
+    b
+}
+
+/// Reads the input front to back; past its end, zeros.
+struct Input<'a> {
+    d: &'a [u8],
+    at: usize,
+}
+
+impl Input<'_> {
+    fn u8(&mut self) -> u8 {
+        let v = self.d.get(self.at).copied().unwrap_or(0);
+        self.at += 1;
+        v
+    }
+    fn u32(&mut self) -> u32 {
+        u32::from_le_bytes([self.u8(), self.u8(), self.u8(), self.u8()])
+    }
+    fn f32(&mut self) -> f32 {
+        f32::from_bits(self.u32())
+    }
+    fn rest(&self) -> &[u8] {
+        self.d.get(self.at..).unwrap_or(&[])
+    }
+}
+
+/// The scene's arrays: a floor, a few triangles, spheres and cones.
+struct SceneData {
+    vertices: Vec<f32>,
+    indices: Vec<u32>,
+    spheres: Vec<f32>,
+    cones: Vec<f32>,
+}
+
+impl SceneData {
+    fn new(inp: &mut Input, perturb: bool) -> SceneData {
+        let mut s = SceneData {
+            vertices: vec![
+                -4., 0., -4., 4., 0., -4., 4., 0., 4., -4., 0., 4., // floor
+                -1., 1., -1., 1., 1., -1., 0., 2.5, 0., // a tent
+                1.5, 0.5, 1.5, 2.5, 0.5, 1.5, 2., 1.5, 2., // another
+            ],
+            indices: vec![0, 1, 2, 0, 2, 3, 4, 5, 6, 7, 8, 9, 4, 6, 9],
+            spheres: vec![0., 1., 2., 0.7, -2., 0.5, -2., 0.5, 2.5, 2., -1., 0.4],
+            cones: vec![
+                -2.5, 0., 2., 0.4, -2.5, 2., 2., 0.1, // cone
+                2.5, 0., -2.5, 0.3, 2.5, 1.5, -2.5, 0.3, // cylinder
+            ],
+        };
+        if perturb {
+            // One value of each array from the input (NaN, infinities and
+            // huge numbers included).
+            let n = s.vertices.len();
+            s.vertices[inp.u8() as usize % n] = inp.f32();
+            let n = s.spheres.len();
+            s.spheres[inp.u8() as usize % n] = inp.f32();
+            let n = s.cones.len();
+            s.cones[inp.u8() as usize % n] = inp.f32();
+        }
+        s
+    }
+
+    fn prims(&self) -> usize {
+        self.indices.len() / 3 + self.spheres.len() / 4 + self.cones.len() / 8
+    }
+
+    fn scene(&self) -> CorayScene {
+        let mut s = coray_scene_default();
+        s.vertices = self.vertices.as_ptr();
+        s.vertex_count = self.vertices.len() / 3;
+        s.indices = self.indices.as_ptr();
+        s.triangle_count = self.indices.len() / 3;
+        s.spheres = self.spheres.as_ptr();
+        s.sphere_count = self.spheres.len() / 4;
+        s.cones = self.cones.as_ptr();
+        s.cone_count = self.cones.len() / 8;
+        s
+    }
+}
+
+/// Rays: a fixed fan through the scene, then a few from the input.
+fn rays(inp: &mut Input) -> Vec<CorayRay> {
+    let mut v = Vec::new();
+    for k in 0..12 {
+        let a = k as f32 * 0.5;
+        v.push(CorayRay {
+            org: [6.0 * a.cos(), 3.0, 6.0 * a.sin()],
+            tnear: 0.0,
+            dir: [-a.cos(), -0.45, -a.sin()],
+            tfar: if k % 3 == 0 { 5.0 } else { f32::INFINITY },
+        });
+    }
+    for _ in 0..inp.u8() % 6 {
+        v.push(CorayRay {
+            org: [inp.f32(), inp.f32(), inp.f32()],
+            tnear: inp.f32(),
+            dir: [inp.f32(), inp.f32(), inp.f32()],
+            tfar: inp.f32(),
+        });
+    }
+    v
+}
+
+/// What a run saw: how many calls ended with each status.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Report {
+    /// Calls per status code (0 to 9).
+    pub statuses: [u32; 10],
+    /// Whether the corrupted arena validated.
+    pub validated: bool,
+}
+
+impl Report {
+    fn note(&mut self, what: &str, s: CorayStatus) -> CorayStatus {
+        assert!(
+            s != CorayStatus::InternalError,
+            "{what}: CORAY_STATUS_INTERNAL_ERROR (a panic caught)"
+        );
+        self.statuses[s as usize] += 1;
+        s
+    }
+}
+
+/// How the input corrupts the arena.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Damage {
+    /// Bytes at input-chosen offsets XORed with input-chosen values.
+    Flips,
+    /// The arena replaced by the input's remaining bytes.
+    Raw,
+    /// The arena cut to an input-chosen length, then flipped.
+    Short,
+}
+
+fn damage(arena: &mut Vec<u8>, inp: &mut Input, how: Damage) {
+    match how {
+        Damage::Raw => *arena = inp.rest().to_vec(),
+        Damage::Short => {
+            let len = inp.u32() as usize % (arena.len() + 1);
+            arena.truncate(len);
+            flips(arena, inp);
+        }
+        Damage::Flips => flips(arena, inp),
+    }
+}
+
+fn flips(arena: &mut [u8], inp: &mut Input) {
+    if arena.is_empty() {
+        return;
+    }
+    for _ in 0..inp.u8() % 16 {
+        let at = inp.u32() as usize % arena.len();
+        arena[at] ^= inp.u8();
+    }
+}
+
+/// Same answer for one ray from the clean and the damaged arena.
+fn same(a: &CorayHit, b: &CorayHit) -> bool {
+    let miss = |h: &CorayHit| h.geom_id == u32::MAX;
+    match (miss(a), miss(b)) {
+        (true, true) => true,
+        (false, false) => {
+            (a.geom_id, a.prim_id, a.t.to_bits()) == (b.geom_id, b.prim_id, b.t.to_bits())
+                || near_tie(a.t, b.t)
+        }
+        _ => false,
+    }
+}
+
+/// The trace answers of one arena for `rays`: closest hits by the array
+/// call, by the one-ray call, any-hit answers, and the statuses of the
+/// two array calls.
+type Answers = (Vec<CorayHit>, Vec<CorayHit>, Vec<u8>, [CorayStatus; 2]);
+
+/// Runs one input. Panics when a property above fails.
+pub fn run(data: &[u8]) -> Report {
+    let mut inp = Input { d: data, at: 0 };
+    let family = inp.u8();
+    let flags = inp.u8();
+    let how = match flags & 3 {
+        0 | 3 => Damage::Flips,
+        1 => Damage::Raw,
+        _ => Damage::Short,
+    };
+    let sd = SceneData::new(&mut inp, flags & 4 != 0);
+    let rays = rays(&mut inp);
+    let mut rep = Report::default();
+    match family % 3 {
+        0 => kd(&sd, &rays, &mut inp, how, family / 3 % 2 == 1, &mut rep),
+        1 => bvh(&sd, &rays, &mut inp, how, family / 3, &mut rep),
+        _ => proj(&sd, &rays, &mut inp, how, family / 3, &mut rep),
+    }
+    rep
+}
+
+/// Checks the damaged arena's answers against the clean one's.
+fn compare(what: &str, clean: &Answers, got: &Answers, rays: &[CorayRay]) {
+    // A validated arena may differ from the clean one in a value that only
+    // changes which rays it takes (a projection plane's eye moved by a
+    // rounding): the documented refusal, nothing else, and then no answers.
+    if clean.3 != got.3 {
+        for s in got.3 {
+            assert!(
+                matches!(s, CorayStatus::Ok | CorayStatus::InvalidParameter),
+                "{what}: a validated arena's trace gives {s:?}"
+            );
+        }
+        return;
+    }
+    for (i, ray) in rays.iter().enumerate() {
+        assert!(
+            same(&clean.0[i], &got.0[i]) && same(&clean.1[i], &got.1[i]),
+            "{what}: a validated arena answers ray {i} ({ray:?}) otherwise: {:?} against {:?}",
+            got.0[i],
+            clean.0[i]
+        );
+        assert_eq!(
+            clean.2[i] != 0,
+            got.2[i] != 0,
+            "{what}: a validated arena's any-hit answer for ray {i} differs"
+        );
+    }
+}
+
+fn requirements() -> CorayRequirements {
+    coray_requirements_default()
+}
+
+fn kd(
+    sd: &SceneData,
+    rays: &[CorayRay],
+    inp: &mut Input,
+    how: Damage,
+    paper: bool,
+    rep: &mut Report,
+) {
+    let scene = sd.scene();
+    let preset = if paper {
+        CORAY_KD_PRESET_PAPER
+    } else {
+        CORAY_KD_PRESET_AUTO
+    };
+    let params = coray_kdtree_params_default(preset);
+    let mut req = requirements();
+    // SAFETY: params and req are live locals with struct_size set.
+    let s = unsafe { coray_kdtree_requirements(sd.prims(), &params, &mut req) };
+    if rep.note("kd requirements", s) != CorayStatus::Ok {
+        return;
+    }
+    let mut arena = blocks(req.arena_bytes);
+    let mut scratch = blocks(req.scratch_bytes);
+    // SAFETY: the scene's arrays outlive the call; arena and scratch are
+    // 16-byte aligned buffers of at least the sizes passed.
+    let s = unsafe {
+        coray_kdtree_build(
+            &scene,
+            &params,
+            arena.as_mut_ptr().cast(),
+            req.arena_bytes,
+            scratch.as_mut_ptr().cast(),
+            req.scratch_bytes,
+            core::ptr::null_mut(),
+        )
+    };
+    if rep.note("kd build", s) != CorayStatus::Ok {
+        return;
+    }
+    let clean = open_kd(&arena, req.arena_bytes, &scene).expect("a clean build opens");
+    // Each traversal against its own clean answers: the two agree on
+    // ordinary rays (tests/kd_oracle.rs), but on grazing rays with
+    // sub-normal directions either may see a hit the other does not.
+    let traversals = [
+        (CORAY_TRAVERSAL_HIERARCHICAL, "kd hierarchical"),
+        (CORAY_TRAVERSAL_ROPES, "kd ropes"),
+    ];
+    let clean_answers = traversals.map(|(t, _)| kd_trace(&clean, rays, t, rep));
+    let mut bytes = as_bytes(&arena);
+    bytes.truncate(req.arena_bytes);
+    damage(&mut bytes, inp, how);
+    let bad = from_bytes(&bytes);
+    let Some(tree) = open_kd(&bad, bytes.len(), &scene)
+        .map_err(|s| rep.note("kd open", s))
+        .ok()
+    else {
+        return;
+    };
+    let mut shape = coray_shape_default();
+    // SAFETY: tree and shape are live locals; the stack argument is ignored by kd validate.
+    let v = unsafe { coray_kdtree_validate(&tree, core::ptr::null_mut(), 0, &mut shape) };
+    rep.validated = rep.note("kd validate", v) == CorayStatus::Ok;
+    for (k, (traversal, what)) in traversals.into_iter().enumerate() {
+        let got = kd_trace(&tree, rays, traversal, rep);
+        if rep.validated {
+            compare(what, &clean_answers[k], &got, rays);
+        }
+    }
+    kd_cast(&tree, inp, rep);
+    kd_patch(&tree, inp, rep);
+}
+
+fn open_kd(arena: &[Block], bytes: usize, scene: &CorayScene) -> Result<CorayKdTree, CorayStatus> {
+    let mut h = CorayKdTree { opaque: [0; 32] };
+    // SAFETY: arena holds at least `bytes` bytes; scene's arrays are live.
+    let s = unsafe { coray_kdtree_open(arena.as_ptr().cast(), bytes, scene, &mut h) };
+    if s == CorayStatus::Ok {
+        Ok(h)
+    } else {
+        Err(s)
+    }
+}
+
+fn kd_trace(
+    t: &CorayKdTree,
+    rays: &[CorayRay],
+    traversal: CorayTraversal,
+    rep: &mut Report,
+) -> Answers {
+    let n = rays.len();
+    let mut stack = blocks(CORAY_KDTREE_STACK_BYTES);
+    let sp: *mut c_void = stack.as_mut_ptr().cast();
+    let mut hits = vec![CorayHit::default(); n];
+    let mut ones = vec![CorayHit::default(); n];
+    let mut occ = vec![0u8; n];
+    let mut stats = coray_trace_stats_default();
+    let mut statuses = [CorayStatus::Ok; 2];
+    // SAFETY: every buffer is live and as long as the count passed; the
+    // stack has CORAY_KDTREE_STACK_BYTES aligned bytes.
+    unsafe {
+        let s = coray_kdtree_intersect(
+            t,
+            traversal,
+            rays.as_ptr(),
+            hits.as_mut_ptr(),
+            n,
+            sp,
+            CORAY_KDTREE_STACK_BYTES,
+            &mut stats,
+        );
+        statuses[0] = rep.note("kd intersect", s);
+        let s = coray_kdtree_occluded(
+            t,
+            traversal,
+            rays.as_ptr(),
+            occ.as_mut_ptr(),
+            n,
+            sp,
+            CORAY_KDTREE_STACK_BYTES,
+            &mut stats,
+        );
+        statuses[1] = rep.note("kd occluded", s);
+        for (r, h) in rays.iter().zip(ones.iter_mut()) {
+            let s = coray_kdtree_intersect1(
+                t,
+                traversal,
+                r,
+                h,
+                sp,
+                CORAY_KDTREE_STACK_BYTES,
+                &mut stats,
+            );
+            rep.note("kd intersect1", s);
+            let mut o = 0u8;
+            let s = coray_kdtree_occluded1(
+                t,
+                traversal,
+                r,
+                &mut o,
+                sp,
+                CORAY_KDTREE_STACK_BYTES,
+                core::ptr::null_mut(),
+            );
+            rep.note("kd occluded1", s);
+        }
+    }
+    (hits, ones, occ, statuses)
+}
+
+fn kd_cast(t: &CorayKdTree, inp: &mut Input, rep: &mut Report) {
+    let mut cam = coray_camera_default();
+    cam.from = [0.0, 3.0, 7.0];
+    cam.at = [0.0, 0.5, 0.0];
+    cam.up = [0.0, 1.0, 0.0];
+    cam.angle_deg = 50.0;
+    cam.width = 1 + inp.u8() as u32 % 12;
+    cam.height = 1 + inp.u8() as u32 % 12;
+    let mut p = coray_cast_params_default();
+    p.scheme = inp.u8() as u32 % 7;
+    p.window_width = inp.u8() as u32 % 8;
+    p.window_height = inp.u8() as u32 % 8;
+    p.history_capacity = 1 + inp.u8() as u32 % 64;
+    let mut req = requirements();
+    // SAFETY: live locals with struct_size set.
+    let s = unsafe { coray_kdtree_cast_requirements(&cam, &p, &mut req) };
+    if rep.note("kd cast requirements", s) != CorayStatus::Ok {
+        return;
+    }
+    let mut scratch = blocks(req.scratch_bytes);
+    let mut stack = blocks(req.stack_bytes);
+    let mut hits = vec![CorayHit::default(); (cam.width * cam.height) as usize];
+    let mut stats = coray_trace_stats_default();
+    // SAFETY: scratch, stack and hits are as large as the requirements
+    // and the camera ask.
+    let s = unsafe {
+        coray_kdtree_cast_image(
+            t,
+            &cam,
+            &p,
+            scratch.as_mut_ptr().cast(),
+            req.scratch_bytes,
+            stack.as_mut_ptr().cast(),
+            req.stack_bytes,
+            hits.as_mut_ptr(),
+            &mut stats,
+        )
+    };
+    rep.note("kd cast image", s);
+}
+
+fn kd_patch(t: &CorayKdTree, inp: &mut Input, rep: &mut Report) {
+    let a = [
+        -2.0f32, 3.0, -2.0, 2.0, 3.0, -2.0, 2.0, 3.0, 2.0, -2.0, 3.0, 2.0,
+    ];
+    let mut b = [
+        -3.0f32, -1.0, -3.0, 3.0, -1.0, -3.0, 3.0, -1.0, 3.0, -3.0, -1.0, 3.0,
+    ];
+    if inp.u8() & 1 == 1 {
+        b[inp.u8() as usize % 12] = inp.f32();
+    }
+    let cap = 1 + inp.u8() as u32 % 64;
+    let samples = inp.u8() as u32 % 6;
+    let mut req = requirements();
+    // SAFETY: a live local with struct_size set.
+    let s = unsafe { coray_kdtree_patch_requirements(cap, &mut req) };
+    if rep.note("kd patch requirements", s) != CorayStatus::Ok {
+        return;
+    }
+    let mut scratch = blocks(req.scratch_bytes);
+    let mut stack = blocks(req.stack_bytes);
+    let mut out = coray_patch_result_default();
+    // SAFETY: both patches hold 4 vertices; scratch and stack are as
+    // large as asked.
+    let s = unsafe {
+        coray_kdtree_patch_visibility(
+            t,
+            a.as_ptr(),
+            4,
+            b.as_ptr(),
+            4,
+            samples,
+            1e-4,
+            scratch.as_mut_ptr().cast(),
+            req.scratch_bytes,
+            stack.as_mut_ptr().cast(),
+            req.stack_bytes,
+            &mut out,
+            core::ptr::null_mut(),
+        )
+    };
+    rep.note("kd patch visibility", s);
+}
+
+/// The BVH builders the families cycle through.
+const BUILDERS: [CorayBvhBuilder; 6] = [
+    CORAY_BVH_BUILDER_TDBS,
+    CORAY_BVH_BUILDER_TDBS_SAH,
+    CORAY_BVH_BUILDER_NN,
+    CORAY_BVH_BUILDER_NN_CHAIN,
+    CORAY_BVH_BUILDER_RTREE,
+    CORAY_BVH_BUILDER_RSTAR,
+];
+
+fn bvh(
+    sd: &SceneData,
+    rays: &[CorayRay],
+    inp: &mut Input,
+    how: Damage,
+    which: u8,
+    rep: &mut Report,
+) {
+    let scene = sd.scene();
+    let builder = BUILDERS[which as usize % BUILDERS.len()];
+    let params = coray_bvh_params_default(builder);
+    let mut req = requirements();
+    // SAFETY: live locals with struct_size set.
+    let s = unsafe { coray_bvh_requirements(sd.prims(), &params, &mut req) };
+    if rep.note("bvh requirements", s) != CorayStatus::Ok {
+        return;
+    }
+    let mut arena = blocks(req.arena_bytes);
+    let mut scratch = blocks(req.scratch_bytes);
+    // SAFETY: as for the kd build.
+    let s = unsafe {
+        coray_bvh_build(
+            &scene,
+            &params,
+            arena.as_mut_ptr().cast(),
+            req.arena_bytes,
+            scratch.as_mut_ptr().cast(),
+            req.scratch_bytes,
+            core::ptr::null_mut(),
+        )
+    };
+    if rep.note("bvh build", s) != CorayStatus::Ok {
+        return;
+    }
+    let clean = open_bvh(&arena, req.arena_bytes, &scene).expect("a clean build opens");
+    let clean_answers = bvh_trace(&clean, rays, req.stack_bytes, rep);
+    let mut bytes = as_bytes(&arena);
+    bytes.truncate(req.arena_bytes);
+    damage(&mut bytes, inp, how);
+    let mut bad = from_bytes(&bytes);
+    let Some(h) = open_bvh(&bad, bytes.len(), &scene)
+        .map_err(|s| rep.note("bvh open", s))
+        .ok()
+    else {
+        return;
+    };
+    rep.validated = bvh_validate(&h, req.stack_bytes, rep) == CorayStatus::Ok;
+    let got = bvh_trace(&h, rays, req.stack_bytes, rep);
+    if rep.validated {
+        compare("bvh", &clean_answers, &got, rays);
+    }
+    if builder == CORAY_BVH_BUILDER_RTREE || builder == CORAY_BVH_BUILDER_RSTAR {
+        // Delete then insert a primitive chosen by the input: all or
+        // nothing, and a valid tree stays valid.
+        let geom = inp.u8() as u32 % 4;
+        let prim = inp.u8() as u32 % 8;
+        let mut deleted = 0u8;
+        let len = bytes.len();
+        // SAFETY: bad holds `len` aligned bytes; scratch is the build's.
+        let s = unsafe {
+            coray_bvh_delete(
+                bad.as_mut_ptr().cast(),
+                len,
+                &scene,
+                geom,
+                prim,
+                scratch.as_mut_ptr().cast(),
+                req.scratch_bytes,
+                &mut deleted,
+            )
+        };
+        let deleted_ok = rep.note("bvh delete", s) == CorayStatus::Ok;
+        // SAFETY: as above.
+        let s = unsafe { coray_bvh_insert(bad.as_mut_ptr().cast(), len, &scene, geom, prim) };
+        let inserted_ok = rep.note("bvh insert", s) == CorayStatus::Ok;
+        if rep.validated && deleted_ok && inserted_ok {
+            let h = open_bvh(&bad, len, &scene).expect("an updated valid tree opens");
+            let v = bvh_validate(&h, req.stack_bytes, rep);
+            if v != CorayStatus::Ok {
+                // The same updates on the clean arena, for the report.
+                let mut c = arena.clone();
+                let mut d2 = 0u8;
+                // SAFETY: as above, on the clean copy.
+                let (s1, s2) = unsafe {
+                    (
+                        coray_bvh_delete(
+                            c.as_mut_ptr().cast(),
+                            len,
+                            &scene,
+                            geom,
+                            prim,
+                            scratch.as_mut_ptr().cast(),
+                            req.scratch_bytes,
+                            &mut d2,
+                        ),
+                        coray_bvh_insert(c.as_mut_ptr().cast(), len, &scene, geom, prim),
+                    )
+                };
+                let hc = open_bvh(&c, len, &scene).expect("opens");
+                let vc = bvh_validate(&hc, req.stack_bytes, rep);
+                panic!("an update left a valid R-tree invalid ({v:?}; deleted {deleted}, geom {geom} prim {prim}; the clean arena: delete {s1:?} deleted {d2}, insert {s2:?}, validate {vc:?})");
+            }
+        }
+    }
+}
+
+fn open_bvh(arena: &[Block], bytes: usize, scene: &CorayScene) -> Result<CorayBvh, CorayStatus> {
+    let mut h = CorayBvh { opaque: [0; 32] };
+    // SAFETY: arena holds at least `bytes` bytes; scene's arrays are live.
+    let s = unsafe { coray_bvh_open(arena.as_ptr().cast(), bytes, scene, &mut h) };
+    if s == CorayStatus::Ok {
+        Ok(h)
+    } else {
+        Err(s)
+    }
+}
+
+fn bvh_validate(h: &CorayBvh, stack_bytes: usize, rep: &mut Report) -> CorayStatus {
+    let mut stack = blocks(stack_bytes);
+    let mut shape = coray_shape_default();
+    // SAFETY: the stack holds stack_bytes aligned bytes.
+    let s = unsafe { coray_bvh_validate(h, stack.as_mut_ptr().cast(), stack_bytes, &mut shape) };
+    rep.note("bvh validate", s)
+}
+
+fn bvh_trace(h: &CorayBvh, rays: &[CorayRay], stack_bytes: usize, rep: &mut Report) -> Answers {
+    let n = rays.len();
+    let mut stack = blocks(stack_bytes);
+    let (sp, sb): (*mut c_void, usize) = (stack.as_mut_ptr().cast(), stack_bytes);
+    let mut hits = vec![CorayHit::default(); n];
+    let mut ones = vec![CorayHit::default(); n];
+    let mut occ = vec![0u8; n];
+    let mut stats = coray_trace_stats_default();
+    let mut statuses = [CorayStatus::Ok; 2];
+    // SAFETY: every buffer is live and as long as the count passed.
+    unsafe {
+        statuses[0] = rep.note(
+            "bvh intersect",
+            coray_bvh_intersect(h, rays.as_ptr(), hits.as_mut_ptr(), n, sp, sb, &mut stats),
+        );
+        statuses[1] = rep.note(
+            "bvh occluded",
+            coray_bvh_occluded(h, rays.as_ptr(), occ.as_mut_ptr(), n, sp, sb, &mut stats),
+        );
+        for (r, one) in rays.iter().zip(ones.iter_mut()) {
+            rep.note(
+                "bvh intersect1",
+                coray_bvh_intersect1(h, r, one, sp, sb, &mut stats),
+            );
+            let mut o = 0u8;
+            rep.note(
+                "bvh occluded1",
+                coray_bvh_occluded1(h, r, &mut o, sp, sb, core::ptr::null_mut()),
+            );
+        }
+    }
+    (hits, ones, occ, statuses)
+}
+
+fn proj(
+    sd: &SceneData,
+    rays: &[CorayRay],
+    inp: &mut Input,
+    how: Damage,
+    which: u8,
+    rep: &mut Report,
+) {
+    let scene = sd.scene();
+    let criteria = if which.is_multiple_of(2) {
+        CORAY_PROJ_CRITERIA_2D
+    } else {
+        CORAY_PROJ_CRITERIA_DUMMY
+    };
+    let builder = BUILDERS[(which / 2) as usize % BUILDERS.len()];
+    let params = coray_proj_params_default(criteria, builder);
+    // The plane of a point light above the scene, looking down (rays
+    // from it are the ones the hierarchy takes).
+    let mut light = coray_light_default();
+    light.kind = CORAY_LIGHT_POINT;
+    light.v = [0.3, 6.0, 0.2];
+    let (lo, hi) = ([-5.0f32, -1.0, -5.0], [5.0f32, 4.0, 5.0]);
+    let mut planes = [coray_proj_plane_default(); 6];
+    let mut count = 0u32;
+    // SAFETY: six planes as the call documents, live locals.
+    let s = unsafe { coray_proj_light_planes(&light, &lo, &hi, planes.as_mut_ptr(), &mut count) };
+    if rep.note("proj light planes", s) != CorayStatus::Ok || count == 0 {
+        return;
+    }
+    let plane = planes[inp.u8() as usize % count as usize];
+    let mut req = requirements();
+    // SAFETY: live locals with struct_size set.
+    let s = unsafe { coray_proj_requirements(sd.prims(), &params, &mut req) };
+    if rep.note("proj requirements", s) != CorayStatus::Ok {
+        return;
+    }
+    let mut arena = blocks(req.arena_bytes);
+    let mut scratch = blocks(req.scratch_bytes);
+    // SAFETY: as for the kd build.
+    let s = unsafe {
+        coray_proj_build(
+            &scene,
+            &params,
+            &plane,
+            arena.as_mut_ptr().cast(),
+            req.arena_bytes,
+            scratch.as_mut_ptr().cast(),
+            req.scratch_bytes,
+            core::ptr::null_mut(),
+        )
+    };
+    if rep.note("proj build", s) != CorayStatus::Ok {
+        return;
+    }
+    // Rays from the light: the plane takes these.
+    let from_light: Vec<CorayRay> = rays
+        .iter()
+        .map(|r| {
+            let to = [
+                r.org[0] + 2.0 * r.dir[0],
+                r.org[1] + 2.0 * r.dir[1],
+                r.org[2] + 2.0 * r.dir[2],
+            ];
+            let d = [to[0] - light.v[0], to[1] - light.v[1], to[2] - light.v[2]];
+            CorayRay {
+                org: light.v,
+                tnear: 0.0,
+                dir: d,
+                tfar: 1.0,
+            }
+        })
+        .collect();
+    let clean = open_proj(&arena, req.arena_bytes, &scene).expect("a clean build opens");
+    let scheme = inp.u8() as u32 % 4;
+    let clean_answers = proj_trace(&clean, scheme, &from_light, req.stack_bytes, rep);
+    let mut bytes = as_bytes(&arena);
+    bytes.truncate(req.arena_bytes);
+    damage(&mut bytes, inp, how);
+    let bad = from_bytes(&bytes);
+    let Some(h) = open_proj(&bad, bytes.len(), &scene)
+        .map_err(|s| rep.note("proj open", s))
+        .ok()
+    else {
+        return;
+    };
+    let mut stack = blocks(req.stack_bytes);
+    let mut shape = coray_shape_default();
+    // SAFETY: the stack holds stack_bytes aligned bytes.
+    let v =
+        unsafe { coray_proj_validate(&h, stack.as_mut_ptr().cast(), req.stack_bytes, &mut shape) };
+    rep.validated = rep.note("proj validate", v) == CorayStatus::Ok;
+    let got = proj_trace(&h, scheme, &from_light, req.stack_bytes, rep);
+    if rep.validated && scheme < 3 {
+        compare("proj", &clean_answers, &got, &from_light);
+    }
+    // Rays the plane does not take, and hostile ones: statuses only.
+    proj_trace(&h, scheme, rays, req.stack_bytes, rep);
+}
+
+fn open_proj(arena: &[Block], bytes: usize, scene: &CorayScene) -> Result<CorayProj, CorayStatus> {
+    let mut h = CorayProj { opaque: [0; 32] };
+    // SAFETY: arena holds at least `bytes` bytes; scene's arrays are live.
+    let s = unsafe { coray_proj_open(arena.as_ptr().cast(), bytes, scene, &mut h) };
+    if s == CorayStatus::Ok {
+        Ok(h)
+    } else {
+        Err(s)
+    }
+}
+
+fn proj_trace(
+    h: &CorayProj,
+    scheme: u32,
+    rays: &[CorayRay],
+    stack_bytes: usize,
+    rep: &mut Report,
+) -> Answers {
+    let n = rays.len();
+    let mut stack = blocks(stack_bytes);
+    let (sp, sb): (*mut c_void, usize) = (stack.as_mut_ptr().cast(), stack_bytes);
+    let mut hits = vec![CorayHit::default(); n];
+    let mut ones = vec![CorayHit::default(); n];
+    let mut occ = vec![0u8; n];
+    let mut stats = coray_trace_stats_default();
+    let mut statuses = [CorayStatus::Ok; 2];
+    // SAFETY: every buffer is live and as long as the count passed.
+    unsafe {
+        statuses[0] = rep.note(
+            "proj intersect",
+            coray_proj_intersect(
+                h,
+                scheme,
+                rays.as_ptr(),
+                hits.as_mut_ptr(),
+                n,
+                sp,
+                sb,
+                &mut stats,
+            ),
+        );
+        statuses[1] = rep.note(
+            "proj occluded",
+            coray_proj_occluded(
+                h,
+                scheme,
+                rays.as_ptr(),
+                occ.as_mut_ptr(),
+                n,
+                sp,
+                sb,
+                &mut stats,
+            ),
+        );
+        for (r, one) in rays.iter().zip(ones.iter_mut()) {
+            rep.note(
+                "proj intersect1",
+                coray_proj_intersect1(h, scheme, r, one, sp, sb, &mut stats),
+            );
+            let mut o = 0u8;
+            rep.note(
+                "proj occluded1",
+                coray_proj_occluded1(h, scheme, r, &mut o, sp, sb, core::ptr::null_mut()),
+            );
+        }
+    }
+    (hits, ones, occ, statuses)
+}
+
+/// Sizes of the ABI structs the harness builds by hand, checked so that a
+/// changed struct is noticed here first.
+const _: () = assert!(size_of::<CorayRay>() == 32 && size_of::<CorayHit>() == 32);

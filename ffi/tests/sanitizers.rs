@@ -1,0 +1,109 @@
+//! The C programs of c_tests/ under the tools that see what a test's own
+//! checks cannot: AddressSanitizer and UndefinedBehaviorSanitizer on the C
+//! side of every call, valgrind's memcheck over the whole process (the
+//! library's reads and writes included), and helgrind over the threads
+//! program (every structure shared between threads).
+mod support;
+
+use std::path::PathBuf;
+use std::process::Command;
+use support::*;
+
+/// The programs that link coray alone, and what each prints on success.
+const PROGRAMS: [&str; 7] = [
+    "api_contract",
+    "canary",
+    "threads",
+    "lcts",
+    "bvh",
+    "proj",
+    "example",
+];
+
+fn library() -> PathBuf {
+    let lib = deps_dir().join("libcoray_ffi.a");
+    assert!(lib.exists(), "{} missing", lib.display());
+    lib
+}
+
+/// Builds c_tests/NAME.c with extra flags into NAME-SUFFIX.
+fn build_with(name: &str, suffix: &str, flags: &[&str]) -> PathBuf {
+    let dir = deps_dir().join("../c_tests");
+    std::fs::create_dir_all(&dir).unwrap();
+    let exe = dir.join(format!("{name}-{suffix}"));
+    let mut cmd = compiler().to_command();
+    cmd.args(["-std=gnu11", "-Wall", "-Wextra", "-Werror", "-g"])
+        .args(flags)
+        .arg("-I")
+        .arg(root().join("include"))
+        .arg(root().join("c_tests").join(format!("{name}.c")))
+        .arg("-o")
+        .arg(&exe)
+        .arg(library())
+        .args(["-lpthread", "-ldl", "-lm"]);
+    run_checked(&mut cmd, &format!("compiling {name}.c ({suffix})"));
+    exe
+}
+
+fn expect_ok(name: &str, out: &str) {
+    let want = if name == "example" {
+        "floor point under the ball is in shadow".to_string()
+    } else {
+        format!("{name}: ok")
+    };
+    assert!(out.contains(&want), "{name}: {out}");
+}
+
+#[test]
+fn c_programs_under_address_and_undefined_sanitizers() {
+    let flags = [
+        "-fsanitize=address,undefined",
+        "-fno-sanitize-recover=all",
+        "-fno-omit-frame-pointer",
+        "-O1",
+    ];
+    for name in PROGRAMS {
+        let exe = build_with(name, "asan", &flags);
+        let out = run_checked(
+            Command::new(&exe).env("ASAN_OPTIONS", "detect_leaks=1:abort_on_error=1"),
+            &format!("{name} under ASan and UBSan"),
+        );
+        expect_ok(name, &out);
+    }
+    // The allocation counter interposes malloc itself: UBSan alone.
+    let exe = build_with(
+        "no_malloc",
+        "ubsan",
+        &["-fsanitize=undefined", "-fno-sanitize-recover=all"],
+    );
+    let out = run_checked(&mut Command::new(&exe), "no_malloc under UBSan");
+    assert!(out.contains("preset 0: 0 allocator calls"), "{out}");
+}
+
+fn valgrind(tool: &str) -> Command {
+    let mut c = Command::new("valgrind");
+    c.args([&format!("--tool={tool}"), "--error-exitcode=3", "-q"]);
+    c
+}
+
+#[test]
+fn c_programs_under_valgrind_memcheck() {
+    // (no_malloc counts calls to its own malloc, which valgrind replaces.)
+    for name in PROGRAMS.iter().filter(|n| **n != "threads") {
+        let exe = build_with(name, "vg", &["-O1"]);
+        let out = run_checked(
+            valgrind("memcheck")
+                .args(["--leak-check=full", "--errors-for-leak-kinds=definite"])
+                .arg(&exe),
+            &format!("{name} under valgrind memcheck"),
+        );
+        expect_ok(name, &out);
+    }
+}
+
+#[test]
+fn threads_under_helgrind() {
+    let exe = build_with("threads", "hg", &["-O1"]);
+    let out = run_checked(valgrind("helgrind").arg(&exe), "threads under helgrind");
+    expect_ok("threads", &out);
+}
