@@ -18,6 +18,13 @@ fn main() {
         "cargo:rustc-env=CORAY_BUILD_HOST={}",
         std::env::var("HOST").unwrap()
     );
+    // The shared library's SONAME: libcoray.so.<major>, the name the
+    // install script gives it (programs link -lcoray and load
+    // libcoray.so.1, whatever cargo called the file).
+    if std::env::var("CARGO_CFG_TARGET_OS").as_deref() == Ok("linux") {
+        let major = std::env::var("CARGO_PKG_VERSION_MAJOR").unwrap();
+        println!("cargo:rustc-cdylib-link-arg=-Wl,-soname,libcoray.so.{major}");
+    }
     if std::env::var_os("CI").is_some() {
         return;
     }

@@ -28,6 +28,12 @@
 // Bytes of the traversal stack every kd-tree trace and cast takes.
 #define CORAY_KDTREE_STACK_BYTES 4608
 
+// Version of the saved-scene file format (`coray build -o`).
+#define CORAY_SAVED_VERSION 1
+
+// Bytes of a saved-scene file's header; its arrays follow, 16-byte aligned.
+#define CORAY_SAVED_HEADER_BYTES 96
+
 // Status of every entry point. Numbers are fixed forever; docs/c-api.md
 // says which situations give which status.
 typedef enum CorayStatus {

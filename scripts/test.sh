@@ -25,5 +25,8 @@ for tool in cc c++ nm; do
 done
 
 cargo fmt --all -- --check
+# Clippy also holds the code to the declared MSRV (rust-version in
+# Cargo.toml): incompatible_msrv is a warning, and warnings are errors.
 cargo clippy --workspace --all-targets --all-features -- -D warnings
+RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --all-features --quiet
 cargo test --workspace --all-features

@@ -140,7 +140,7 @@ impl OwnedBvh {
                 (r.nodes, r.refs, r)
             }
             BvhBuild::RTree(p) => {
-                let r = bvh::rtree_requirements(prim_count, &p);
+                let r = bvh::RTree::requirements(prim_count, &p);
                 let s = bvh::BvhRequirements {
                     links: r.scratch,
                     ..Default::default()
@@ -282,7 +282,7 @@ pub struct OwnedProj {
 impl OwnedProj {
     /// Room for a hierarchy by `builder` over `prim_count` primitives.
     pub fn with_room(prim_count: usize, builder: &ProjBuilder, plane: ProjPlane) -> OwnedProj {
-        let req = proj::proj_requirements(prim_count, builder);
+        let req = proj::requirements(prim_count, builder);
         let s = &req.bvh_scratch;
         OwnedProj {
             nodes: vec![BvhNode::default(); req.nodes],
@@ -310,7 +310,7 @@ impl OwnedProj {
         criteria: Criteria,
     ) -> Result<(), Error> {
         let (boxes, keys, links, clusters, source, stack) = &mut self.scratch;
-        let h = proj::build_proj(
+        let h = proj::build(
             scene,
             self.plane,
             builder,

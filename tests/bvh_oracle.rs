@@ -4,8 +4,8 @@ mod common;
 
 use common::*;
 use coray::bvh::{
-    self, rtree_requirements, Builder, Bvh, BvhNode, BvhScratch, BvhStackItem, BvhStorage,
-    InsertOrder, RTree, RTreeParams, Split,
+    self, Builder, Bvh, BvhNode, BvhScratch, BvhStackItem, BvhStorage, InsertOrder, RTree,
+    RTreeParams, Split,
 };
 use coray::TraceStats;
 use coray::{oracle, Aabb, Error, Hit, Ray, Scene};
@@ -132,11 +132,11 @@ fn build_rtree<'a>(
     nodes: &'a mut Vec<BvhNode>,
     refs: &'a mut Vec<u32>,
 ) -> RTree<'a> {
-    let req = rtree_requirements(scene.prim_count(), &p);
+    let req = RTree::requirements(scene.prim_count(), &p);
     nodes.resize(req.nodes, BvhNode::default());
     refs.resize(req.refs, 0);
     let mut order = vec![0u32; req.scratch];
-    RTree::build(scene, p, nodes, refs, &mut order).expect("room from rtree_requirements")
+    RTree::build(scene, p, nodes, refs, &mut order).expect("room from RTree::requirements")
 }
 
 #[test]
@@ -356,7 +356,7 @@ fn rtree_insert_into_a_full_arena() {
         ..RTreeParams::rstar()
     };
     for p in [RTreeParams::rtree(), RTreeParams::rstar(), reinsert] {
-        let req = rtree_requirements(100, &p);
+        let req = RTree::requirements(100, &p);
         let mut nodes = vec![BvhNode::default(); req.nodes];
         let mut refs = vec![0u32; req.refs];
         let mut t = RTree::new(&scene, p, &mut nodes, &mut refs).unwrap();

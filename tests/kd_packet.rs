@@ -145,3 +145,36 @@ fn packets_with_odd_lanes() {
     rays.truncate(rays.len() - 3);
     same_as_hierarchical(&t, &rays, "odd lanes");
 }
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(24))]
+
+    /// Random scenes of every primitive kind, random cameras (shrunk to
+    /// the smallest failing case): packets answer as hierarchical
+    /// traversal, and that as the brute-force oracle.
+    #[test]
+    fn packets_match_the_oracle(
+        seed in 0u64..1 << 40,
+        tris in 0usize..400,
+        spheres in 0usize..80,
+        cones in 0usize..80,
+        eye in proptest::array::uniform3(-12.0f32..12.0),
+    ) {
+        let mut rng = Rng(seed);
+        let o = random_scene(&mut rng, tris, spheres, cones, 3.0);
+        let sc = o.scene();
+        let kd = coray::owned::OwnedKd::new(&sc, &KdParams::auto()).unwrap();
+        let t = kd.tree(sc).unwrap();
+        let eye = Vec3::from(eye);
+        proptest::prop_assume!(eye.length() > 4.0);
+        let rays = camera_tiles(eye, Vec3::ZERO, 16, 8, 0.5);
+        same_as_hierarchical(&t, &rays, "random camera");
+        let mut stack = kst();
+        let mut st = TraceStats::default();
+        for r in &rays {
+            let h = t.intersect(r, Traversal::Hierarchical, &mut stack, &mut st);
+            let want = coray::oracle::intersect(&sc, r);
+            proptest::prop_assert!(h.is_hit() == want.is_hit() && (!h.is_hit() || h.t == want.t), "{r:?}: {h:?} vs {want:?}");
+        }
+    }
+}

@@ -9,8 +9,8 @@ use coray::bvh::{Builder, BvhNode, BvhScratch, BvhStackItem, RTreeParams};
 use coray::kd::{KdParams, Traversal};
 use coray::proj::lights::{Light, LightPlanes};
 use coray::proj::{
-    build_proj, proj_requirements, Criteria, ProjBuilder, ProjHierarchy, ProjPlane, ProjScheme,
-    ProjScratch, ProjStorage, Rect,
+    self, Criteria, ProjBuilder, ProjHierarchy, ProjPlane, ProjScheme, ProjScratch, ProjStorage,
+    Rect,
 };
 use coray::{Aabb, Hit, Ray, Scene, TraceStats};
 use coray_scenes::spd::{self, Options};
@@ -32,7 +32,7 @@ fn build<'a>(
     o: &'a mut Owned,
 ) -> ProjHierarchy<'a> {
     let n = scene.prim_count();
-    let req = proj_requirements(n, &b);
+    let req = proj::requirements(n, &b);
     o.nodes = vec![BvhNode::default(); req.nodes];
     o.refs = vec![0; req.refs];
     o.rects = vec![Rect::EMPTY; req.rects];
@@ -45,7 +45,7 @@ fn build<'a>(
         vec![BvhNode::default(); s.clusters],
     );
     let (mut source, mut stack) = (vec![Aabb::EMPTY; req.source], vec![0u32; req.stack]);
-    let h = build_proj(
+    let h = proj::build(
         scene,
         plane,
         b,

@@ -125,6 +125,19 @@ enum Command {
         #[arg(long)]
         threads: Option<usize>,
     },
+    /// Builds a kd-tree and saves it with its scene in one file, for a C
+    /// program to map and trace (examples/trace_saved.c; format in
+    /// ffi/src/saved.rs).
+    Build {
+        /// Scene: an NFF file, `spd:NAME[:SIZE]` or `random[:N]`.
+        scene: String,
+        /// The file to write.
+        #[arg(short, long, default_value = "scene.coray")]
+        output: PathBuf,
+        /// kd-tree preset: auto or paper.
+        #[arg(long, default_value = "auto")]
+        preset: String,
+    },
     /// Objects by type and, per structure, its size and shape.
     Stats {
         /// Scene: an NFF file, `spd:NAME[:SIZE]` or `random[:N]`.
@@ -342,6 +355,33 @@ fn run(command: Command, floor_split: u32) -> Result<i32, String> {
             }
             Ok(0)
         }
+        Command::Build {
+            scene,
+            output,
+            preset,
+        } => {
+            let preset = match Preset::parse(&preset)? {
+                Preset::Auto => coray_ffi::CORAY_KD_PRESET_AUTO,
+                Preset::Paper => coray_ffi::CORAY_KD_PRESET_PAPER,
+            };
+            let s = scene::load(&scene, &opts)?;
+            let n = s.prim_count();
+            budget::check_memory(
+                &format!("a kd-tree over {n} primitives"),
+                budget::kd_bytes(&coray::kd::requirements(n, &Preset::Auto.params())),
+            )?;
+            let bytes = coray_ffi::saved::kdtree_file(&s.mesh.scene(), preset)
+                .map_err(|st| format!("{scene}: the build failed: {}", status_text(st)))?;
+            std::fs::write(&output, &bytes).map_err(|e| format!("{}: {e}", output.display()))?;
+            println!(
+                "{}: {} objects, a kd-tree and its scene in {} bytes -> {}",
+                s.name,
+                s.mesh.counts.objects(),
+                bytes.len(),
+                output.display()
+            );
+            Ok(0)
+        }
         Command::Stats { scene, json } => {
             let s = scene::load(&scene, &opts)?;
             let report = stats::stats(&s)?;
@@ -356,6 +396,13 @@ fn run(command: Command, floor_split: u32) -> Result<i32, String> {
             Ok(0)
         }
     }
+}
+
+/// A status's description, as `coray_status_str` gives it.
+fn status_text(s: coray_ffi::CorayStatus) -> String {
+    coray_ffi::status_description(s as i32)
+        .to_string_lossy()
+        .into_owned()
 }
 
 /// `coray bench --table NAME`.

@@ -25,7 +25,7 @@ fn tmp(name: &str) -> PathBuf {
     d
 }
 
-/// `coray stats --json` against DESIGN.md's table, all eight SPD scenes.
+/// `coray stats --json` against the table in docs/techniques.md, all eight SPD scenes.
 #[test]
 fn stats_counts_match_the_design_table() {
     let d = tmp("stats");

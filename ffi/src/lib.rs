@@ -27,6 +27,8 @@ mod cast;
 mod handle;
 mod kdtree;
 mod proj;
+#[cfg(feature = "std")]
+pub mod saved;
 pub mod simd;
 
 pub use abi::*;
@@ -110,7 +112,12 @@ fn guard(f: impl FnOnce() -> Result<(), CorayStatus>) -> CorayStatus {
 /// values get "unknown status"). Never NULL; never free it.
 #[no_mangle]
 pub extern "C" fn coray_status_str(status: i32) -> *const core::ffi::c_char {
-    let s: &'static core::ffi::CStr = match status {
+    status_description(status).as_ptr()
+}
+
+/// What `coray_status_str` returns, for Rust callers.
+pub fn status_description(status: i32) -> &'static core::ffi::CStr {
+    match status {
         0 => c"ok",
         1 => c"null pointer",
         2 => c"misaligned arena, stack, array or struct",
@@ -122,8 +129,7 @@ pub extern "C" fn coray_status_str(status: i32) -> *const core::ffi::c_char {
         8 => c"scene differs from the one the arena was built on",
         9 => c"internal error (a bug in coray)",
         _ => c"unknown status",
-    };
-    s.as_ptr()
+    }
 }
 
 /// The library's version, `(major << 16) | (minor << 8) | patch`: compare

@@ -18,8 +18,7 @@ use coray::proj::layout::{
 };
 use coray::proj::lights::{Light, LightPlanes};
 use coray::proj::{
-    build_proj, proj_requirements, Criteria, ProjBuilder, ProjHierarchy, ProjPlane, ProjScheme,
-    ProjScratch, ProjStorage, Rect,
+    Criteria, ProjBuilder, ProjHierarchy, ProjPlane, ProjScheme, ProjScratch, ProjStorage, Rect,
 };
 use coray::{Aabb, Accel, Ray, Scene, TraceStats, Vec3};
 use core::ffi::c_void;
@@ -372,7 +371,7 @@ fn layouts(n: usize, b: &ProjBuilder) -> Result<(ProjArenaLayout, ProjScratchLay
     if n >= MAX_PRIMS {
         return Err(too_many);
     }
-    let r = proj_requirements(n, b);
+    let r = coray::proj::requirements(n, b);
     Ok((
         ProjArenaLayout::of_requirements(&r).ok_or(too_many)?,
         ProjScratchLayout::of(&r).ok_or(too_many)?,
@@ -501,7 +500,7 @@ pub unsafe extern "C" fn coray_proj_build(
                 },
             )
         };
-        let h = build_proj(&scene, pl, builder, criteria, storage, scratch)?;
+        let h = coray::proj::build(&scene, pl, builder, criteria, storage, scratch)?;
         let mut hd = ProjArenaHeader {
             magic: PROJ_MAGIC,
             version: PROJ_VERSION,

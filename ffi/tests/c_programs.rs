@@ -78,12 +78,12 @@ fn four_threads_trace_like_one() {
 }
 
 #[test]
-fn readme_example_is_the_tested_one_and_runs() {
-    let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
+fn documented_example_is_the_tested_one_and_runs() {
+    let doc = std::fs::read_to_string(root().join("docs/c-api.md")).unwrap();
     let example = std::fs::read_to_string(root().join("c_tests/example.c")).unwrap();
     assert!(
-        readme.contains(example.trim()),
-        "README.md must quote c_tests/example.c verbatim"
+        doc.contains(example.trim()),
+        "docs/c-api.md must quote c_tests/example.c verbatim"
     );
     let out = run_program("example", &[]);
     assert!(out.contains("hit geometry 1 primitive 0 at t = 8"));

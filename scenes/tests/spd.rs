@@ -1,4 +1,4 @@
-//! SPD generators: exact counts per type at DESIGN.md's sizes and along the
+//! SPD generators: exact counts per type at the default sizes (docs/techniques.md) and along the
 //! thesis' size ladders, bounds, the floor split, and NFF round trips.
 use coray_scenes::spd::{self, Options};
 use coray_scenes::{NffScene, SceneMesh};
@@ -8,7 +8,7 @@ fn mesh(name: &str, size: Option<u32>, split: u32) -> SceneMesh {
     SceneMesh::from_nff(&s)
 }
 
-/// (spheres, polygons, cones, cylinders) of DESIGN.md's table.
+/// (spheres, polygons, cones, cylinders) of the table in docs/techniques.md.
 #[test]
 fn counts_at_design_sizes() {
     let table: &[(&str, usize, [usize; 4])] = &[

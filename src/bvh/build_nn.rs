@@ -32,15 +32,6 @@ fn best_partner(clusters: &[BvhNode], k: usize, m: usize) -> (u32, f32) {
     best
 }
 
-/// Builds a binary hierarchy by bottom-up matching; one primitive per leaf.
-pub fn build_nn<'a>(
-    scene: &Scene<'a>,
-    storage: BvhStorage<'a>,
-    scratch: BvhScratch,
-) -> Result<Bvh<'a>, Error> {
-    build(scene, None, storage, scratch)
-}
-
 pub(crate) fn build<'a>(
     scene: &Scene<'a>,
     source: Option<&[Aabb]>,

@@ -6,7 +6,7 @@
 //! For such a distance the chain (follow nearest neighbours until two are
 //! each other's; join them; go on from the rest of the chain) makes the
 //! same joins as always joining the globally closest pair, which is
-//! [`super::build_nn`]; only exact ties can be broken differently.
+//! the quadratic matching ([`super::Builder::Nn`]); only exact ties can be broken differently.
 //!
 //! Nearest neighbours come from a kd-tree built once over the primitives'
 //! box centres (median splits, implicit layout, `2n - 1` boxes). A cluster
@@ -171,17 +171,6 @@ fn kd_order(refs: &mut [u32], boxes: &[Aabb]) {
         stack[sp + 1] = (mid, hi);
         sp += 2;
     }
-}
-
-/// Builds a binary hierarchy by bottom-up matching with the
-/// nearest-neighbour chain; one primitive per leaf. Storage as
-/// [`super::requirements`] gives for [`super::Builder::NnChain`].
-pub fn build_nn_chain<'a>(
-    scene: &Scene<'a>,
-    storage: BvhStorage<'a>,
-    scratch: BvhScratch,
-) -> Result<Bvh<'a>, Error> {
-    build(scene, None, storage, scratch)
 }
 
 pub(crate) fn build<'a>(

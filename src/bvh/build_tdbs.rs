@@ -35,19 +35,6 @@ fn sort_run(run: &mut [u32], boxes: &[Aabb], axis: usize) {
     });
 }
 
-/// Builds a binary hierarchy by top-down splitting (`Builder::Tdbs` or
-/// `Builder::TdbsSah`) with at most `leaf_size` (at least 1; the thesis
-/// uses 1) primitives per leaf.
-pub fn build_tdbs<'a>(
-    scene: &Scene<'a>,
-    builder: Builder,
-    leaf_size: u32,
-    storage: BvhStorage<'a>,
-    scratch: BvhScratch,
-) -> Result<Bvh<'a>, Error> {
-    build(scene, None, builder, leaf_size, storage, scratch)
-}
-
 pub(crate) fn build<'a>(
     scene: &Scene<'a>,
     source: Option<&[Aabb]>,

@@ -3,7 +3,7 @@
 //! scratch (the insertion order alone for an R-tree's build and deletes).
 //! Counts in, bytes out, checked ([`crate::arena::Parts`]).
 
-use super::rtree::{rtree_requirements, RTreeParams, RTreeState, Split};
+use super::rtree::{RTree, RTreeParams, RTreeState, Split};
 use super::{BvhInfo, BvhNode, BvhRequirements};
 use crate::arena::Parts;
 use crate::limits::MAX_PRIMS;
@@ -108,7 +108,7 @@ impl BvhArenaLayout {
 
     /// The arena of an R-tree that holds up to `capacity` objects.
     pub fn rtree(capacity: usize, p: &RTreeParams) -> Option<BvhArenaLayout> {
-        let r = rtree_requirements(capacity, p);
+        let r = RTree::requirements(capacity, p);
         BvhArenaLayout::of(r.nodes, r.refs)
     }
 

@@ -1,8 +1,9 @@
 //! Bounding volume hierarchies of axis-aligned boxes, built four ways as
 //! Bezerianos' thesis compares them (sections 2.2.2, 3.3.3, chapter 5):
-//! top-down binary splitting ([`build_tdbs`], balanced children or SAH),
+//! top-down binary splitting ([`Builder::Tdbs`], balanced children, or
+//! [`Builder::TdbsSah`]),
 //! bottom-up matching of the pair with the smallest joint surface area
-//! ([`build_nn`]), and the R-tree and R*-tree ([`RTree`]: dynamic insert
+//! ([`Builder::Nn`], [`Builder::NnChain`]), all through [`build`], and the R-tree and R*-tree ([`RTree`]: dynamic insert
 //! and delete in caller memory).
 //!
 //! Every builder writes the same [`BvhNode`] layout, so one traversal
@@ -18,13 +19,10 @@ mod rtree;
 pub(crate) mod traverse;
 mod validate;
 
-pub use build_nn::build_nn;
-pub use build_nn_chain::build_nn_chain;
-pub use build_tdbs::build_tdbs;
 pub use node::BvhNode;
 pub use rtree::{
-    rtree_requirements, validate_rtree, InsertOrder, RTree, RTreeParams, RTreeRequirements,
-    RTreeState, Split, MAX_CHILDREN,
+    validate_rtree, InsertOrder, RTree, RTreeParams, RTreeRequirements, RTreeState, Split,
+    MAX_CHILDREN,
 };
 pub use traverse::{BvhStackItem, BOX_HIT_COST};
 pub use validate::BvhTreeStats;

@@ -86,3 +86,29 @@ impl BvhNode {
         self.count = (self.count & LEAF_BIT) | n;
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The leaf bit and the count share one word without touching each
+    /// other; the box and the first index are kept as given.
+    #[test]
+    fn node_fields_round_trip() {
+        let b = Aabb {
+            min: Vec3::new(-1.0, 2.0, -0.0),
+            max: Vec3::new(3.0, 4.5, 1e-30),
+        };
+        let l = BvhNode::leaf(&b, 17, 5);
+        assert!(l.is_leaf() && l.len() == 5 && l.first == 17 && l.bounds() == b);
+        let mut n = BvhNode::interior(&b, 3, 32);
+        assert!(!n.is_leaf() && n.len() == 32);
+        n.set_len(2);
+        assert!(!n.is_leaf() && n.len() == 2);
+        let mut m = l;
+        m.set_len(0);
+        assert!(m.is_leaf() && m.is_empty());
+        assert!(BvhNode::default().is_leaf() && BvhNode::default().bounds().is_empty());
+        assert_eq!(core::mem::size_of::<BvhNode>(), 32);
+    }
+}

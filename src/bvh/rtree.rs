@@ -108,23 +108,6 @@ pub struct RTreeRequirements {
     pub scratch: usize,
 }
 
-/// Room for an R-tree of up to `capacity` objects with `params`.
-pub fn rtree_requirements(capacity: usize, params: &RTreeParams) -> RTreeRequirements {
-    let big = params.max_children.clamp(4, MAX_CHILDREN) as usize;
-    let small = params.min_children.clamp(2, big as u32 / 2) as usize;
-    let leaves = (capacity / small).max(1);
-    let (mut x, mut interior) = (leaves, 0usize);
-    while x > 1 {
-        x = x.div_ceil(small);
-        interior += x;
-    }
-    RTreeRequirements {
-        nodes: 1 + big * (interior + 1),
-        refs: big * (leaves + 1),
-        scratch: capacity,
-    }
-}
-
 /// [`Bvh::validate`] with the R-tree's fill rules, and the parts only an
 /// R-tree has: each free list names blocks that were handed out, as many as
 /// its count says, none twice; blocks in use and free blocks add up to the
@@ -271,6 +254,23 @@ fn morton(c: crate::Vec3, lo: crate::Vec3, hi: crate::Vec3) -> u32 {
 }
 
 impl<'a> RTree<'a> {
+    /// Room for an R-tree of up to `capacity` objects with `params`.
+    pub fn requirements(capacity: usize, params: &RTreeParams) -> RTreeRequirements {
+        let big = params.max_children.clamp(4, MAX_CHILDREN) as usize;
+        let small = params.min_children.clamp(2, big as u32 / 2) as usize;
+        let leaves = (capacity / small).max(1);
+        let (mut x, mut interior) = (leaves, 0usize);
+        while x > 1 {
+            x = x.div_ceil(small);
+            interior += x;
+        }
+        RTreeRequirements {
+            nodes: 1 + big * (interior + 1),
+            refs: big * (leaves + 1),
+            scratch: capacity,
+        }
+    }
+
     /// An empty tree over `scene` (objects enter with [`RTree::insert`]).
     pub fn new(
         scene: &Scene<'a>,
@@ -711,7 +711,7 @@ impl<'a> RTree<'a> {
     /// reinsertion can need: every level but the root reinserts once, and
     /// each entry placed may split nodes up to a new root. Without it the
     /// insert splits plainly (and checks its exact needs), so an arena sized
-    /// by [`rtree_requirements`] still holds its capacity.
+    /// by [`RTree::requirements`] still holds its capacity.
     fn room_for_reinsertion(&self) -> bool {
         let h = self.state.height as usize;
         if h + 2 > MAX_HEIGHT {

@@ -1,6 +1,6 @@
 //! Closest-hit and any-hit traversal of every hierarchy, counting the
 //! thesis' metrics: hierarchy objects (boxes) and actual objects
-//! (primitives) tested, and their cost in the thesis' units (DESIGN.md:
+//! (primitives) tested, and their cost in the thesis' units (docs/design.md, Metrics:
 //! add, multiply, compare 1, divide 5, square root 15).
 
 use super::{Bvh, BvhNode};

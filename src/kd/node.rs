@@ -238,3 +238,30 @@ impl KdInfo {
         self.flags & KD_FLAG_TRUNCATED != 0
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Interior and leaf words keep axis, split bits and index apart, for
+    /// every axis and up to the largest index a build makes (2^30 - 1).
+    #[test]
+    fn node_words_round_trip() {
+        for axis in 0..3 {
+            for (split, left) in [(0.5f32, 1u32), (-0.0, 7), (f32::MAX, (1 << 30) - 1)] {
+                let n = KdNode::interior(axis, split, left);
+                assert!(!n.is_leaf());
+                assert_eq!(
+                    (n.axis(), n.split().to_bits(), n.index()),
+                    (axis, split.to_bits(), left)
+                );
+            }
+        }
+        let l = KdNode::leaf((1 << 30) - 1);
+        assert!(l.is_leaf() && l.index() == (1 << 30) - 1);
+        // FAULT is a leaf whose record no build makes.
+        assert!(KdNode::FAULT.is_leaf() && KdNode::FAULT.index() > (1 << 30) - 1 - 1);
+        assert_eq!(core::mem::size_of::<KdNode>(), 8);
+        assert_eq!(core::mem::size_of::<KdStackItem>(), 8);
+    }
+}

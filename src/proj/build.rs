@@ -28,14 +28,14 @@ pub struct ProjRequirements {
 }
 
 /// Room for a projection hierarchy over `prim_count` primitives.
-pub fn proj_requirements(prim_count: usize, builder: &ProjBuilder) -> ProjRequirements {
+pub fn requirements(prim_count: usize, builder: &ProjBuilder) -> ProjRequirements {
     let (nodes, refs, bvh_scratch, order) = match builder {
         ProjBuilder::Static(b) => {
             let r = bvh::requirements(prim_count, *b);
             (r.nodes, r.refs, r, 0)
         }
         ProjBuilder::RTree(p) => {
-            let r = bvh::rtree_requirements(prim_count, p);
+            let r = bvh::RTree::requirements(prim_count, p);
             (r.nodes, r.refs, bvh::BvhRequirements::default(), r.scratch)
         }
     };
@@ -81,7 +81,7 @@ fn need(slice: &'static str, needed: usize, got: usize) -> Result<(), Error> {
 
 /// Builds a projection hierarchy of `scene` on `plane` with `builder`
 /// over `criteria`.
-pub fn build_proj<'a>(
+pub fn build<'a>(
     scene: &Scene<'a>,
     plane: ProjPlane,
     builder: ProjBuilder,
@@ -90,7 +90,7 @@ pub fn build_proj<'a>(
     scratch: ProjScratch,
 ) -> Result<ProjHierarchy<'a>, Error> {
     let n = scene.prim_count();
-    let req = proj_requirements(n, &builder);
+    let req = requirements(n, &builder);
     need("rects", req.rects, storage.rects.len())?;
     need("prim_rects", req.prim_rects, storage.prim_rects.len())?;
     need("source", req.source, scratch.source.len())?;

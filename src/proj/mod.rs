@@ -26,7 +26,7 @@ pub mod lights;
 mod plane;
 mod traverse;
 
-pub use build::{build_proj, proj_requirements, ProjRequirements, ProjScratch, ProjStorage};
+pub use build::{build, requirements, ProjRequirements, ProjScratch, ProjStorage};
 pub use plane::{cube_face_of, cube_faces, ProjPlane, Rect, UNBOUNDED};
 pub use traverse::{ProjScheme, Projected, RECT_COST};
 
@@ -55,7 +55,7 @@ pub enum Criteria {
 /// A projection hierarchy: a hierarchy whose nodes have 3D boxes (in
 /// `bvh.nodes`) and rectangles on `plane` (`rects`, same indices), and the
 /// rectangle of every primitive (`prim_rects`, by global primitive index).
-/// Made only by [`build_proj`] and [`ProjHierarchy::from_parts`].
+/// Made only by [`build`] and [`ProjHierarchy::from_parts`].
 #[derive(Clone, Copy)]
 pub struct ProjHierarchy<'a> {
     /// Structure, 3D boxes, references, scene.

@@ -27,7 +27,7 @@ mod tree;
 
 use crate::nff::{Light, Material, NffScene, Object, View};
 
-/// The scenes this module generates, with their default (DESIGN.md) sizes.
+/// The scenes this module generates, with their default sizes (the table in docs/techniques.md).
 pub const SCENES: &[(&str, u32)] = &[
     ("balls", 4),
     ("gears", 4),
