@@ -15,6 +15,7 @@ mod render;
 mod scene;
 mod series;
 mod shoot;
+mod spd;
 mod stats;
 
 use bench::Settings;
@@ -63,12 +64,21 @@ enum Command {
         /// kd-tree preset of `kd` and `kd-rope`: auto or paper.
         #[arg(long, default_value = "auto")]
         preset: String,
-        /// Reflection and refraction depth (0 to 64).
-        #[arg(long, default_value_t = 5)]
-        depth: u32,
+        /// Reflection and refraction depth (0 to 64; default 5). `--spd` fixes it.
+        #[arg(long)]
+        depth: Option<u32>,
         /// Threads (default: all cores).
         #[arg(long)]
         threads: Option<usize>,
+        /// The SPD testing procedure: 512x512 pixels (or --res N), eye rays
+        /// through the pixel corners, ray tree depth 5, the SPD's shadow and
+        /// refraction rules; prints its ray statistics. `--accel` may also
+        /// name an LCTS cast (slcts1d, slcts2d, hlcts1d, hlcts2d) for the eye rays.
+        #[arg(long)]
+        spd: bool,
+        /// With --spd: print the statistics as one JSON object.
+        #[arg(long, requires = "spd")]
+        json: bool,
     },
     /// Methods side by side on the same rays in one run; a table with a legend, or JSON.
     Bench {
@@ -148,6 +158,77 @@ enum Command {
     },
 }
 
+/// `coray render SCENE --spd`: the SPD testing procedure ([`spd`]).
+#[allow(clippy::too_many_arguments)]
+fn render_spd(
+    scene: &str,
+    output: &std::path::Path,
+    res: Option<String>,
+    accel: &str,
+    preset: &str,
+    threads: Option<usize>,
+    json: bool,
+    opts: &Options,
+) -> Result<i32, String> {
+    let threads = threads_or_all(threads)?;
+    let method = Method::parse(accel)?;
+    let preset = Preset::parse(preset)?;
+    let pixels = match res {
+        None => spd::PIXELS,
+        Some(r) => match parse_res(&r)? {
+            (w, h) if w == h && w < u64::from(coray::limits::MAX_IMAGE_SIDE) => w as u32,
+            _ => {
+                return Err(format!(
+                    "--spd wants a square image below 32768 pixels: --res N, not `{r}`"
+                ))
+            }
+        },
+    };
+    let s = scene::load(scene, opts)?;
+    let n = f64::from(pixels + 1);
+    budget::check_memory(&format!("{n}x{n} corner rays"), n * n * 12.0)?;
+    let mesh = spd::procedure_mesh(&s.mesh, pixels);
+    let (outcome, threads) = if let Method::Cast { scheme } = method {
+        let b = built::Built::new(
+            Method::kd(coray::kd::Traversal::Hierarchical),
+            &mesh,
+            preset,
+            1,
+        )?;
+        let tree = b
+            .kd()
+            .expect("a kd method")
+            .tree(mesh.scene())
+            .map_err(|e| e.to_string())?;
+        (spd::run_cast(&mesh, tree, scheme)?, 1)
+    } else {
+        let b = built::Built::new(method, &mesh, preset, threads)?;
+        let job = spd::Job {
+            mesh: &mesh,
+            threads,
+            progress: !json,
+        };
+        (b.visit(job), threads)
+    };
+    render::write_image(
+        output,
+        pixels,
+        pixels,
+        &spd::image(&outcome.corners, pixels),
+    )?;
+    let report = spd::Report::new(&s.name, &method.to_string(), pixels, threads, &outcome);
+    if json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?
+        );
+    } else {
+        print!("{}", report.text());
+        println!("  -> {}", output.display());
+    }
+    Ok(0)
+}
+
 /// The paper tables of `bench --table`, with what each shows: the help
 /// text and the error list both come from here.
 const TABLES: [(&str, &str); 7] = [
@@ -184,8 +265,10 @@ fn main() {
         res: None,
         accel: "kd".into(),
         preset: "auto".into(),
-        depth: 5,
+        depth: None,
         threads: None,
+        spd: false,
+        json: false,
     });
     match run(command, cli.floor_split) {
         Ok(0) => {}
@@ -242,8 +325,17 @@ fn run(command: Command, floor_split: u32) -> Result<i32, String> {
             preset,
             depth,
             threads,
+            spd,
+            json,
         } => {
             render::ImageFormat::for_path(&output)?;
+            if spd {
+                if depth.is_some() {
+                    return Err("--spd fixes the ray tree depth at 5: leave out --depth".into());
+                }
+                return render_spd(&scene, &output, res, &accel, &preset, threads, json, &opts);
+            }
+            let depth = depth.unwrap_or(5);
             if depth > 64 {
                 return Err(format!("--depth must be 0 to 64, not {depth}"));
             }

@@ -1,14 +1,104 @@
-//! `coray render`: a Whitted ray tracer over any built method. Primary
-//! rays, a shadow ray to every light, reflection (Ks) and refraction (T,
-//! index of refraction) to a depth limit, NFF materials, `pp` normals
-//! interpolated. Rows are shared among threads; the structure is immutable.
-//! Shadow rays do not say which light they go to (projection methods then
-//! choose a light plane as the thesis' uniform mode does).
+//! `coray render`: a Whitted ray tracer over any built method. Eye rays, a
+//! shadow ray to every light, reflection (Ks) and refraction (T, index of
+//! refraction) to a depth limit, NFF materials, `pp` normals interpolated.
+//! Two sets of [`Rules`]: coray's own ([`Rules::WHITTED`], pixel-centre
+//! rays) and the SPD testing procedure's ([`Rules::SPD`], used by
+//! `render --spd`, see [`crate::spd`]). Rows are shared among threads; the
+//! structure is immutable. Every ray is counted in [`RayCounts`].
 
 use crate::shoot::Shooter;
-use coray::{Hit, Ray, TraceStats, Vec3};
+use coray::{Camera, Hit, Ray, TraceStats, Vec3};
 use coray_scenes::SceneMesh;
 use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// What a render does where renderers differ. Plain data, chosen once per
+/// render.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Rules {
+    /// Reflection rays from transmitting surfaces too, not only from
+    /// specular (Ks > 0) ones.
+    pub reflect_from_transmitters: bool,
+    /// Opaque primitives without vertex normals are one-sided: the light
+    /// test uses their front normal (counter-clockwise vertex order, a
+    /// sphere's or cone's outward one), whichever side the ray hit. Off,
+    /// and always for `pp` patches and transmitters: the normal faces the ray.
+    pub one_sided: bool,
+    /// Total internal reflection turns the refraction ray into a mirror
+    /// ray (true) or casts none (false: the reflection ray already covers it).
+    pub tir_casts_mirror_ray: bool,
+    /// Shadow rays name the light they go to (projection methods then use
+    /// that light's plane); off, they do not, and projection methods choose
+    /// a plane as the thesis' uniform mode does.
+    pub name_lights: bool,
+}
+
+impl Rules {
+    /// coray's own conventions (the default render).
+    pub const WHITTED: Rules = Rules {
+        reflect_from_transmitters: false,
+        one_sided: false,
+        tir_casts_mirror_ray: true,
+        name_lights: false,
+    };
+    /// The SPD testing procedure's (docs/techniques.md, "SPD testing procedure").
+    pub const SPD: Rules = Rules {
+        reflect_from_transmitters: true,
+        one_sided: true,
+        tir_casts_mirror_ray: false,
+        name_lights: true,
+    };
+}
+
+/// Rays a render traced, by kind, as the SPD's statistics count them.
+/// They depend on the scene, the rules and the eye rays only, never on the
+/// structure or the thread count.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct RayCounts {
+    /// Eye (primary) rays.
+    pub eye_rays: u64,
+    /// Eye rays that hit an object.
+    pub eye_hits: u64,
+    /// Reflection rays.
+    pub reflect_rays: u64,
+    /// Refraction rays.
+    pub refract_rays: u64,
+    /// Shadow rays.
+    pub shadow_rays: u64,
+    /// Shadow rays that met an object before the light.
+    pub shadow_hits: u64,
+    /// Reflection and refraction rays that hit an object.
+    pub secondary_hits: u64,
+}
+
+impl RayCounts {
+    /// Adds another thread's counts.
+    pub fn add(&mut self, o: &RayCounts) {
+        self.eye_rays += o.eye_rays;
+        self.eye_hits += o.eye_hits;
+        self.reflect_rays += o.reflect_rays;
+        self.refract_rays += o.refract_rays;
+        self.shadow_rays += o.shadow_rays;
+        self.shadow_hits += o.shadow_hits;
+        self.secondary_hits += o.secondary_hits;
+    }
+
+    /// Reflection plus refraction rays.
+    pub fn secondary_rays(&self) -> u64 {
+        self.reflect_rays + self.refract_rays
+    }
+
+    /// Every ray: eye, reflection, refraction and shadow.
+    pub fn all_rays(&self) -> u64 {
+        self.eye_rays + self.secondary_rays() + self.shadow_rays
+    }
+
+    /// Rays whose query had to find an intersection (GOLEM's
+    /// IntersRequired as we read it): eye and secondary rays that hit,
+    /// and shadow rays that met an object.
+    pub fn intersections_required(&self) -> u64 {
+        self.eye_hits + self.secondary_hits + self.shadow_hits
+    }
+}
 
 /// What a render needs to trace rays.
 pub struct Tracer<'a, S: Shooter> {
@@ -16,15 +106,35 @@ pub struct Tracer<'a, S: Shooter> {
     pub mesh: &'a SceneMesh,
     /// What rays are shot through.
     pub shooter: &'a S,
-    /// Reflection and refraction depth.
+    /// Reflection and refraction depth: rays spawn from hits of depth
+    /// below it (the eye ray's depth is 0).
     pub max_depth: u32,
-    /// Reflection and refraction rays traced so far (all threads).
-    pub secondary: std::sync::atomic::AtomicU64,
+    /// The conventions.
+    pub rules: Rules,
+}
+
+/// Per-thread state of a render: the traversal's context and the counts.
+pub struct TraceCtx<C> {
+    /// The shooter's per-thread state.
+    pub shooter: C,
+    /// Traversal statistics of every ray.
+    pub stats: TraceStats,
+    /// Rays by kind.
+    pub counts: RayCounts,
 }
 
 const EPS: f32 = 1e-4;
 
 impl<S: Shooter> Tracer<'_, S> {
+    /// Fresh per-thread state.
+    pub fn ctx(&self) -> TraceCtx<S::Ctx> {
+        TraceCtx {
+            shooter: self.shooter.ctx(),
+            stats: TraceStats::default(),
+            counts: RayCounts::default(),
+        }
+    }
+
     fn scale(&self) -> f32 {
         let b = self.shooter.bounds();
         if b.is_empty() {
@@ -34,10 +144,19 @@ impl<S: Shooter> Tracer<'_, S> {
         }
     }
 
-    /// Shading normal at a hit, facing against the ray.
-    fn normal(&self, ray: &Ray, h: &Hit) -> Vec3 {
+    /// Shading normal at a hit (unit, or zero when degenerate) and whether
+    /// it came from `pp` vertex normals; oriented as the primitive's
+    /// front: counter-clockwise triangles, outward spheres and cones.
+    fn front_normal(&self, h: &Hit) -> (Vec3, bool) {
         let m = self.mesh;
-        let mut n = h.ng.normalize_or_zero();
+        // coray's (and Embree's) triangle ng is (a - b) x (c - a): the
+        // clockwise side. Fronts here are counter-clockwise, as in NFF.
+        let ng = if h.geom_id == coray::geom::GEOM_TRIANGLES {
+            -h.ng
+        } else {
+            h.ng
+        };
+        let n = ng.normalize_or_zero();
         if h.geom_id == coray::geom::GEOM_TRIANGLES {
             let t = m.triangles[h.prim_id as usize];
             if t.iter().all(|&i| m.has_normal[i as usize]) {
@@ -45,15 +164,11 @@ impl<S: Shooter> Tracer<'_, S> {
                 let v = |i: usize| Vec3::from(m.normals[t[i] as usize]);
                 let s = (v(0) * w + v(1) * h.u + v(2) * h.v).normalize_or_zero();
                 if s != Vec3::ZERO {
-                    n = s;
+                    return (s, true);
                 }
             }
         }
-        if n.dot(ray.dir) > 0.0 {
-            -n
-        } else {
-            n
-        }
+        (n, false)
     }
 
     fn material(&self, h: &Hit) -> coray_scenes::nff::Material {
@@ -66,22 +181,45 @@ impl<S: Shooter> Tracer<'_, S> {
         m.materials[m.prim_material[base + h.prim_id as usize] as usize]
     }
 
-    /// Colour seen along `ray`.
-    pub fn trace(&self, ray: &Ray, depth: u32, ctx: &mut S::Ctx, st: &mut TraceStats) -> Vec3 {
-        let h = self.shooter.intersect(ray, ctx, st);
+    /// Colour seen along `ray` (of `depth`: 0 for eye rays), counting it.
+    pub fn trace(&self, ray: &Ray, depth: u32, ctx: &mut TraceCtx<S::Ctx>) -> Vec3 {
+        let h = self
+            .shooter
+            .intersect(ray, &mut ctx.shooter, &mut ctx.stats);
+        self.shade(ray, &h, depth, ctx)
+    }
+
+    /// Colour of hit `h` of `ray` (found by any means, e.g. an LCTS cast),
+    /// counting the ray and tracing the rays it spawns.
+    pub fn shade(&self, ray: &Ray, h: &Hit, depth: u32, ctx: &mut TraceCtx<S::Ctx>) -> Vec3 {
+        let counts = &mut ctx.counts;
+        if depth == 0 {
+            counts.eye_rays += 1;
+            counts.eye_hits += h.is_hit() as u64;
+        } else {
+            counts.secondary_hits += h.is_hit() as u64;
+        }
         if !h.is_hit() {
             return self.mesh.background;
         }
-        let m = self.material(&h);
+        let m = self.material(h);
         let p = ray.origin + ray.dir * h.t;
         let d = ray.dir.normalize();
         let geometric_in = h.ng.dot(ray.dir) < 0.0;
-        let n = self.normal(ray, &h);
+        let (front, patch) = self.front_normal(h);
+        // The normal facing the ray: shading, reflection and refraction.
+        let n = if front.dot(ray.dir) > 0.0 {
+            -front
+        } else {
+            front
+        };
+        let one_sided = self.rules.one_sided && !patch && m.t <= 0.0;
+        let light_n = if one_sided { front } else { n };
         let color = Vec3::from(m.color);
         let eps = EPS * self.scale();
         let light_scale = 1.0 / (self.mesh.lights.len().max(1) as f32).sqrt();
         let mut c = Vec3::ZERO;
-        for (lp, lc) in &self.mesh.lights {
+        for (li, (lp, lc)) in self.mesh.lights.iter().enumerate() {
             let to = *lp - p;
             let dist = to.length();
             if !(dist > 0.0 && dist.is_finite()) {
@@ -89,14 +227,20 @@ impl<S: Shooter> Tracer<'_, S> {
                 continue;
             }
             let l = to / dist;
-            let ndl = n.dot(l);
-            if ndl <= 0.0 {
+            if light_n.dot(l) <= 0.0 {
                 continue;
             }
             let shadow = Ray::new(p, l, eps, dist);
-            if self.shooter.occluded(&shadow, None, ctx, st) {
+            ctx.counts.shadow_rays += 1;
+            let light = self.rules.name_lights.then_some(li);
+            if self
+                .shooter
+                .occluded(&shadow, light, &mut ctx.shooter, &mut ctx.stats)
+            {
+                ctx.counts.shadow_hits += 1;
                 continue;
             }
+            let ndl = n.dot(l).max(0.0);
             c += color * *lc * (m.kd * ndl * light_scale);
             if m.ks > 0.0 && m.shine > 0.0 {
                 let r = l - n * (2.0 * ndl);
@@ -104,85 +248,125 @@ impl<S: Shooter> Tracer<'_, S> {
                 c += *lc * (m.ks * s * light_scale);
             }
         }
-        if depth < self.max_depth && (m.ks > 0.0 || m.t > 0.0) {
-            let count = (m.ks > 0.0) as u64 + (m.t > 0.0) as u64;
-            self.secondary.fetch_add(count, Ordering::Relaxed);
-            if m.ks > 0.0 {
-                let r = d - n * (2.0 * d.dot(n));
-                c += self.trace(&Ray::new(p, r, eps, f32::INFINITY), depth + 1, ctx, st) * m.ks;
-            }
-            if m.t > 0.0 {
-                // Entering when the ray meets the geometric front side.
-                let eta = if geometric_in {
-                    1.0 / m.ior.max(1e-3)
-                } else {
-                    m.ior
-                };
-                let cos_i = -d.dot(n);
-                let k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
-                let dir = if k < 0.0 {
-                    d + n * (2.0 * cos_i)
-                } else {
-                    d * eta + n * (eta * cos_i - k.sqrt())
-                };
-                c += self.trace(&Ray::new(p, dir, eps, f32::INFINITY), depth + 1, ctx, st) * m.t;
+        if depth >= self.max_depth {
+            return c;
+        }
+        let reflect = m.ks > 0.0 || (self.rules.reflect_from_transmitters && m.t > 0.0);
+        if reflect {
+            ctx.counts.reflect_rays += 1;
+            let r = d - n * (2.0 * d.dot(n));
+            let weight = if m.ks > 0.0 { m.ks } else { 1.0 - m.t };
+            c += self.trace(&Ray::new(p, r, eps, f32::INFINITY), depth + 1, ctx) * weight;
+        }
+        if m.t > 0.0 {
+            // Entering when the ray meets the geometric front side.
+            let eta = if geometric_in {
+                1.0 / m.ior.max(1e-3)
+            } else {
+                m.ior
+            };
+            let cos_i = -d.dot(n);
+            let k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
+            let dir = if k >= 0.0 {
+                Some(d * eta + n * (eta * cos_i - k.sqrt()))
+            } else if self.rules.tir_casts_mirror_ray {
+                Some(d + n * (2.0 * cos_i))
+            } else {
+                None
+            };
+            if let Some(dir) = dir {
+                ctx.counts.refract_rays += 1;
+                c += self.trace(&Ray::new(p, dir, eps, f32::INFINITY), depth + 1, ctx) * m.t;
             }
         }
         c
     }
 }
 
-/// Renders the camera's image with `threads` threads; RGB bytes, row 0 on top.
-pub fn render<S: Shooter>(t: &Tracer<S>, threads: usize, progress: bool) -> (Vec<u8>, TraceStats) {
-    let pb = crate::bench::progress(t.mesh.camera.height as usize, progress);
+/// Linear colours of a camera's pixel centres, row 0 on top, traced with
+/// `threads` threads; with the threads' statistics and counts summed.
+pub fn render_colors<S: Shooter>(
+    t: &Tracer<S>,
+    cam: &Camera,
+    threads: usize,
+    progress: bool,
+) -> (Vec<Vec3>, TraceStats, RayCounts) {
+    let pb = crate::bench::progress(cam.height as usize, progress);
     pb.set_message("rows");
-    let cam = &t.mesh.camera;
     let (w, h) = (cam.width as usize, cam.height as usize);
     let (f, r, u) = cam.basis();
     let next = AtomicUsize::new(0);
-    let mut image = vec![0u8; w * h * 3];
-    let rows: Vec<std::sync::Mutex<&mut [u8]>> =
-        image.chunks_mut(w * 3).map(std::sync::Mutex::new).collect();
-    let mut total = TraceStats::default();
+    let mut image = vec![Vec3::ZERO; w * h];
+    let rows: Vec<std::sync::Mutex<&mut [Vec3]>> =
+        image.chunks_mut(w).map(std::sync::Mutex::new).collect();
+    let (mut stats, mut counts) = (TraceStats::default(), RayCounts::default());
     std::thread::scope(|s| {
         let handles: Vec<_> = (0..threads.max(1))
             .map(|_| {
                 s.spawn(|| {
-                    let mut st = TraceStats::default();
-                    let mut ctx = t.shooter.ctx();
+                    let mut ctx = t.ctx();
                     loop {
                         let y = next.fetch_add(1, Ordering::Relaxed);
                         if y >= h {
                             break;
                         }
                         let mut row = rows[y].lock().unwrap();
-                        for x in 0..w {
-                            let ray = cam.ray_in(f, r, u, x as f32 + 0.5, y as f32 + 0.5);
-                            let ray = Ray::new(
-                                ray.origin,
-                                ray.dir,
-                                t.mesh.hither.max(0.0),
-                                f32::INFINITY,
-                            );
-                            let c = t.trace(&ray, 0, &mut ctx, &mut st);
-                            for (k, v) in c.to_array().iter().enumerate() {
-                                row[3 * x + k] =
-                                    (v.clamp(0.0, 1.0).powf(1.0 / 2.2) * 255.0 + 0.5) as u8;
-                            }
+                        for (x, px) in row.iter_mut().enumerate() {
+                            let ray = eye_ray(t.mesh, cam, (f, r, u), x as u32, y as u32, t.rules);
+                            *px = t.trace(&ray, 0, &mut ctx);
                         }
                         pb.inc(1);
                     }
-                    st
+                    (ctx.stats, ctx.counts)
                 })
             })
             .collect();
         for hd in handles {
-            total.add(&hd.join().unwrap());
+            let (st, c) = hd.join().unwrap();
+            stats.add(&st);
+            counts.add(&c);
         }
     });
     pb.finish_and_clear();
     drop(rows);
-    (image, total)
+    (image, stats, counts)
+}
+
+/// The eye ray through the centre of pixel `(x, y)`: from the hither
+/// plane on (coray's rules) or from the eye (the SPD's, whose procedure
+/// has no hither, and the LCTS casts').
+pub fn eye_ray(
+    mesh: &SceneMesh,
+    cam: &Camera,
+    basis: (Vec3, Vec3, Vec3),
+    x: u32,
+    y: u32,
+    rules: Rules,
+) -> Ray {
+    let (f, r, u) = basis;
+    let ray = cam.ray_in(f, r, u, x as f32 + 0.5, y as f32 + 0.5);
+    if rules == Rules::SPD {
+        ray
+    } else {
+        Ray::new(ray.origin, ray.dir, mesh.hither.max(0.0), f32::INFINITY)
+    }
+}
+
+/// 8-bit sRGB-ish bytes (gamma 2.2) of a linear colour.
+pub fn to_rgb8(c: Vec3) -> [u8; 3] {
+    c.to_array()
+        .map(|v| (v.clamp(0.0, 1.0).powf(1.0 / 2.2) * 255.0 + 0.5) as u8)
+}
+
+/// Renders the scene's camera with `threads` threads: RGB bytes (row 0 on
+/// top), statistics and counts.
+pub fn render<S: Shooter>(
+    t: &Tracer<S>,
+    threads: usize,
+    progress: bool,
+) -> (Vec<u8>, TraceStats, RayCounts) {
+    let (colors, st, counts) = render_colors(t, &t.mesh.camera, threads, progress);
+    (colors.into_iter().flat_map(to_rgb8).collect(), st, counts)
 }
 
 /// An image file format, chosen by the file's extension.
@@ -252,10 +436,10 @@ impl crate::built::Visit for Job<'_> {
             mesh: self.mesh,
             shooter,
             max_depth: self.depth,
-            secondary: Default::default(),
+            rules: Rules::WHITTED,
         };
         let t = std::time::Instant::now();
-        let (rgb, st) = render(&tracer, self.threads, true);
+        let (rgb, st, _) = render(&tracer, self.threads, true);
         (rgb, st.rays, t.elapsed().as_secs_f64())
     }
 }

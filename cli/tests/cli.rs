@@ -583,3 +583,68 @@ fn bad_inputs_get_a_message_and_status_2() {
         .unwrap()
         .starts_with(b"P6\n8 8\n255\n"));
 }
+
+/// `render --spd` on two facing mirrors with a light between them: every
+/// count follows from the procedure by hand. 16 x 16 pixels give 17 x 17 =
+/// 289 eye rays; each bounces between the mirrors to tree depth 5 (4
+/// reflection rays, all hitting), and every hit whose front faces the
+/// light casts one unblocked shadow ray. With the far mirror wound
+/// backwards (one-sided), its hits (depths 2 and 4) cast none.
+#[test]
+fn spd_procedure_counts_mirrors_by_hand() {
+    let d = tmp("spd");
+    let scene = |far: &str| {
+        format!(
+            "v\nfrom 0 0 5\nat 0 0 0\nup 0 1 0\nangle 40\nhither 0.01\nresolution 16 16\n\
+             b 0 0 0\nl 0 0 5\nf 1 1 1 0.5 0.5 10 0 1\n\
+             p 4\n-100 -100 0\n100 -100 0\n100 100 0\n-100 100 0\np 4\n{far}"
+        )
+    };
+    let facing = "-100 -100 10\n-100 100 10\n100 100 10\n100 -100 10\n";
+    let away = "-100 -100 10\n100 -100 10\n100 100 10\n-100 100 10\n";
+    for (file, far, shadow_per_eye) in [("facing.nff", facing, 5), ("away.nff", away, 3)] {
+        std::fs::write(d.join(file), scene(far)).unwrap();
+        for accel in ["kd", "tdbs", "proj-rstar-2d-2d", "slcts2d"] {
+            let (code, out, err) = coray(
+                &[
+                    "render", file, "--spd", "--res", "16", "--json", "--accel", accel,
+                ],
+                &d,
+            );
+            assert_eq!(code, 0, "{err}");
+            let v = json(&out);
+            let want = [
+                ("eye_rays", 289),
+                ("eye_hits", 289),
+                ("reflect_rays", 4 * 289),
+                ("refract_rays", 0),
+                ("secondary_hits", 4 * 289),
+                ("shadow_rays", shadow_per_eye * 289),
+                ("shadow_hits", 0),
+                ("all_rays", (5 + shadow_per_eye) * 289),
+                ("intersections_required", 5 * 289),
+                ("tree_depth", 5),
+                ("pixels", 16),
+            ];
+            for (key, n) in want {
+                assert_eq!(v[key], n, "{file}, {accel}: {key}");
+            }
+        }
+    }
+    let png = std::fs::read(d.join("coray.png")).unwrap();
+    assert_eq!(u32::from_be_bytes(png[16..20].try_into().unwrap()), 16);
+    for (args, msg) in [
+        (
+            &["render", "--spd", "--depth", "3"][..],
+            "leave out --depth",
+        ),
+        (&["render", "--spd", "--res", "16x8"][..], "square image"),
+    ] {
+        let (code, _, err) = coray(args, &d);
+        assert_eq!(code, 2, "{args:?}");
+        assert!(err.contains(msg), "{args:?}: {err}");
+    }
+    let (code, out, err) = coray(&["render", "spd:tetra:1", "--spd", "--res", "8"], &d);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("eye rays") && out.contains("81"), "{out}");
+}

@@ -182,13 +182,13 @@ impl Visit for TimeRender<'_> {
                 mesh: &self.s.mesh,
                 shooter,
                 max_depth: RENDER_DEPTH,
-                secondary: Default::default(),
+                rules: render::Rules::WHITTED,
             };
             let t = Instant::now();
-            let (_, st) = render::render(&tracer, 1, false);
+            let (_, st, counts) = render::render(&tracer, 1, false);
             best = best.min(t.elapsed().as_secs_f64());
             rays = st.rays;
-            secondary = tracer.secondary.into_inner();
+            secondary = counts.secondary_rays();
         }
         (best, rays, secondary)
     }
