@@ -30,3 +30,6 @@ cargo fmt --all -- --check
 cargo clippy --workspace --all-targets --all-features -- -D warnings
 RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --all-features --quiet
 cargo test --workspace --all-features
+# coray on a Cortex-M4 under QEMU, checked against the host (about 2 minutes;
+# installs Debian's Rust, the Arm toolchain and QEMU when missing).
+scripts/embedded.sh

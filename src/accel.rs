@@ -157,7 +157,8 @@ impl Accel for KdTree<'_> {
         })
     }
 
-    /// With [`Traversal::Packets`], packets of 8 where the rays move alike.
+    /// With [`Traversal::Packets`], packets of 8 where the rays move alike
+    /// (feature `packets`; without it, ray by ray, the same hits).
     fn intersect_many(
         &self,
         rays: &[Ray],
@@ -167,7 +168,7 @@ impl Accel for KdTree<'_> {
         stats: &mut TraceStats,
     ) -> Result<(), Error> {
         check_lengths(rays.len(), hits.len(), stack.len(), KD_STACK_LEN)?;
-        if method == Traversal::Packets {
+        if cfg!(feature = "packets") && method == Traversal::Packets {
             self.intersect_packets(rays, hits, stack, stats);
         } else {
             for (r, h) in rays.iter().zip(hits.iter_mut()) {
@@ -177,7 +178,8 @@ impl Accel for KdTree<'_> {
         Ok(())
     }
 
-    /// With [`Traversal::Packets`], packets of 8 where the rays move alike.
+    /// With [`Traversal::Packets`], packets of 8 where the rays move alike
+    /// (feature `packets`; without it, ray by ray, the same hits).
     fn occluded_many(
         &self,
         rays: &[Ray],
@@ -187,7 +189,7 @@ impl Accel for KdTree<'_> {
         stats: &mut TraceStats,
     ) -> Result<(), Error> {
         check_lengths(rays.len(), out.len(), stack.len(), KD_STACK_LEN)?;
-        if method == Traversal::Packets {
+        if cfg!(feature = "packets") && method == Traversal::Packets {
             self.occluded_packets(rays, out, stack, stats);
         } else {
             for (r, o) in rays.iter().zip(out.iter_mut()) {

@@ -7,6 +7,7 @@ mod bench;
 mod budget;
 mod built;
 mod compare;
+mod export;
 mod lcts_table;
 mod method;
 mod plot;
@@ -155,6 +156,18 @@ enum Command {
         /// Print one JSON object.
         #[arg(long)]
         json: bool,
+    },
+    /// Writes a scene as C arrays in CorayScene's layout (for firmware
+    /// without a file system; embedded/ is built with one).
+    Export {
+        /// Scene: an NFF file, `spd:NAME[:SIZE]` or `random[:N]`.
+        scene: String,
+        /// The C header to write.
+        #[arg(short, long, default_value = "scene.h")]
+        output: PathBuf,
+        /// Prefix of the C names: PREFIX_vertices, PREFIX_SPHERE_COUNT, ...
+        #[arg(long, default_value = "scene")]
+        prefix: String,
     },
 }
 
@@ -470,6 +483,28 @@ fn run(command: Command, floor_split: u32) -> Result<i32, String> {
                 s.name,
                 s.mesh.counts.objects(),
                 bytes.len(),
+                output.display()
+            );
+            Ok(0)
+        }
+        Command::Export {
+            scene,
+            output,
+            prefix,
+        } => {
+            let ident = |c: char| c == '_' || c.is_ascii_alphanumeric();
+            if prefix.is_empty()
+                || prefix.starts_with(|c: char| c.is_ascii_digit())
+                || !prefix.chars().all(ident)
+            {
+                return Err(format!("--prefix must be a C identifier, not `{prefix}`"));
+            }
+            let s = scene::load(&scene, &opts)?;
+            std::fs::write(&output, export::c_header(&scene, &prefix, &s.mesh))
+                .map_err(|e| format!("{}: {e}", output.display()))?;
+            println!(
+                "{scene}: {} objects -> {}",
+                s.mesh.counts.objects(),
                 output.display()
             );
             Ok(0)

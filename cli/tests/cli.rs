@@ -648,3 +648,29 @@ fn spd_procedure_counts_mirrors_by_hand() {
     assert_eq!(code, 0, "{err}");
     assert!(out.contains("eye rays") && out.contains("81"), "{out}");
 }
+
+/// `coray export`: a scene as C arrays, counts as macros, names prefixed.
+#[test]
+fn export_writes_the_scene_as_c_arrays() {
+    let d = tmp("export");
+    let (code, out, err) = coray(
+        &["export", "spd:tetra:1", "--prefix", "t4", "-o", "t.h"],
+        &d,
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("spd:tetra:1: 4 objects -> t.h"), "{out}");
+    let h = std::fs::read_to_string(d.join("t.h")).unwrap();
+    for want in [
+        "#define T4_TRIANGLE_COUNT 4\n",
+        "#define T4_VERTEX_COUNT 12\n",
+        "#define T4_SPHERE_COUNT 0\n",
+        "static const float t4_spheres[] = {0};",
+        "static const uint32_t t4_indices[] = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11};",
+        "#define T4_ANGLE_DEG ",
+    ] {
+        assert!(h.contains(want), "{want} not in\n{h}");
+    }
+    let (code, _, err) = coray(&["export", "spd:tetra:1", "--prefix", "9x"], &d);
+    assert_eq!(code, 2);
+    assert!(err.contains("C identifier"), "{err}");
+}

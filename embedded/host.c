@@ -1,0 +1,8 @@
+/* The embedded test program on the host: stdout for printing. */
+#include <stdio.h>
+
+#include "program.h"
+
+void platform_print(const char *s) { fputs(s, stdout); }
+
+int main(void) { return program(); }

@@ -1,0 +1,96 @@
+#!/usr/bin/env bash
+# coray on a Cortex-M4F: builds the core and the bare C library for
+# thumbv7em-none-eabihf with Debian's Rust (rustc-web, its library source
+# in rust-web-src, -Zbuild-std=core), links embedded/program.c with the
+# project's own start-up code and linker script (no C library at all), runs
+# it on QEMU's mps2-an386 (Cortex-M4, semihosting), runs the same program
+# built for the host against the host's bare library, and requires the same
+# check lines from both. Prints flash, RAM and stack figures; fails when
+# the kd-tree + LCTS firmware's flash passes 128 KiB.
+#
+# Installs what is missing with apt-get (as root). Called by scripts/test.sh.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+need=()
+[ -x /usr/bin/rustc ] && /usr/bin/rustc --print target-list | grep -qx thumbv7em-none-eabihf || need+=(rustc-web)
+[ -x /usr/bin/cargo ] || need+=(cargo-web)
+[ -d /usr/lib/rustlib/src/rust/library/core ] || need+=(rust-web-src)
+command -v arm-none-eabi-gcc >/dev/null || need+=(gcc-arm-none-eabi)
+[ -d /usr/lib/arm-none-eabi/newlib ] || need+=(libnewlib-arm-none-eabi)
+command -v qemu-system-arm >/dev/null || need+=(qemu-system-arm)
+if [ ${#need[@]} -gt 0 ]; then
+    echo "installing ${need[*]}"
+    apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${need[@]}"
+fi
+
+out=target/embedded
+mkdir -p "$out"
+
+# The scenes are built in: the committed headers must be what
+# `coray export` writes today.
+cargo run -q -p coray-cli -- export spd:mount:4 --prefix mount -o "$out/scene_mount.h" >/dev/null
+cargo run -q -p coray-cli -- export spd:rings:1 --prefix rings -o "$out/scene_rings.h" >/dev/null
+for h in scene_mount.h scene_rings.h; do
+    cmp -s "$out/$h" "embedded/$h" || { echo "embedded/$h differs from coray export: regenerate it"; exit 1; }
+done
+
+# The library for the board: Debian's Rust 1.96, core built from source.
+RUSTC_BOOTSTRAP=1 RUSTC=/usr/bin/rustc /usr/bin/cargo rustc -q -p coray-ffi \
+    --no-default-features --profile embedded --target thumbv7em-none-eabihf \
+    -Zbuild-std=core --target-dir "$out" --crate-type staticlib
+board_lib="$out/thumbv7em-none-eabihf/embedded/libcoray_ffi.a"
+
+# The host's bare library (profile bare, opt-level 3, this machine's
+# toolchain): the checks must agree across optimisation levels too.
+cargo build -q -p coray-ffi --no-default-features --profile bare --target-dir target/bare
+host_lib=target/bare/bare/libcoray_ffi.a
+
+# No fused multiply-add contraction in the program's own arithmetic:
+# the Cortex-M4F has vfma, x86-64's baseline has none.
+common=(-O2 -ffp-contract=off -std=c11 -Wall -Wextra -Werror -Iinclude -Iembedded)
+arm=(-mcpu=cortex-m4 -mthumb -mfloat-abi=hard -mfpu=fpv4-sp-d16 -ffunction-sections -fdata-sections)
+link=(-nostartfiles -nostdlib -T embedded/mps2_an386.ld -Wl,--gc-sections -Wl,--no-warn-rwx-segments -Wl,--no-warn-execstack -lgcc)
+for variant in kd every; do
+    defs=()
+    [ "$variant" = every ] && defs=(-DEVERY_STRUCTURE)
+    arm-none-eabi-gcc "${common[@]}" "${arm[@]}" "${defs[@]}" embedded/startup.c embedded/program.c \
+        "$board_lib" "${link[@]}" -Wl,-Map="$out/firmware-$variant.map" -o "$out/firmware-$variant.elf"
+done
+cc "${common[@]}" -DEVERY_STRUCTURE embedded/host.c embedded/program.c "$host_lib" \
+    -Wl,--gc-sections -o "$out/host-program"
+
+"$out/host-program" > "$out/host.txt"
+# Semihosting writes to QEMU's stderr.
+start=$(date +%s%N)
+timeout 600 qemu-system-arm -M mps2-an386 -nographic -monitor none -serial none -semihosting \
+    -kernel "$out/firmware-every.elf" > /dev/null 2> "$out/board.txt" || {
+    cat "$out/board.txt"; echo "embedded: the board program failed"; exit 1; }
+ms=$((($(date +%s%N) - start) / 1000000))
+cat "$out/board.txt"
+grep '^check' "$out/host.txt" > "$out/host.checks"
+grep '^check' "$out/board.txt" > "$out/board.checks"
+if ! diff "$out/host.checks" "$out/board.checks"; then
+    echo "embedded: the board and the host disagree"; exit 1
+fi
+grep -q '^embedded: ok' "$out/board.txt" || { echo "embedded: the board program failed"; exit 1; }
+echo "embedded: $(wc -l < "$out/board.checks") check lines identical on the Cortex-M4 and the host (board run $ms ms)"
+
+# Flash: .text holds code and read-only data (the linker script merges
+# them); the scenes' arrays are counted apart.
+scene_bytes() {
+    arm-none-eabi-nm -S -t d "$1" | awk '$4 ~ /^(mount|rings)_/ { s += $2 } END { print s + 0 }'
+}
+for variant in kd every; do
+    elf="$out/firmware-$variant.elf"
+    text=$(arm-none-eabi-size -A "$elf" | awk '$1 == ".text" { print $2 }')
+    scenes=$(scene_bytes "$elf")
+    code=$((text - scenes))
+    echo "flash ($variant): $text bytes of .text + .rodata, $scenes of them the built-in scenes: $code bytes ($((code / 1024)) KiB) of coray and the program"
+    if [ "$variant" = kd ] && [ "$code" -gt $((128 * 1024)) ]; then
+        echo "embedded: the kd-tree + LCTS firmware passes 128 KiB of flash"; exit 1
+    fi
+done
+bss=$(arm-none-eabi-size -A "$out/firmware-every.elf" | awk '$1 == ".bss" { print $2 }')
+echo "ram: $bss bytes of static arenas and buffers (.bss), 65536 of stack"
