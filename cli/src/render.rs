@@ -40,7 +40,7 @@ impl Rules {
         tir_casts_mirror_ray: true,
         name_lights: false,
     };
-    /// The SPD testing procedure's (docs/techniques.md, "SPD testing procedure").
+    /// The SPD testing procedure's (README, "The SPD testing procedure").
     pub const SPD: Rules = Rules {
         reflect_from_transmitters: true,
         one_sided: true,
