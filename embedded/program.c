@@ -227,12 +227,14 @@ static void kd_tree(const BoardScene *s, CorayKdPreset preset, const char *tag) 
     size_t scratch_bytes = req.scratch_bytes < SCRATCH_BYTES ? req.scratch_bytes : SCRATCH_BYTES;
     st = coray_kdtree_build(&s->scene, &params, arena, arena_bytes, scratch, scratch_bytes, NULL);
     expect(st == CORAY_STATUS_OK, n, "kd build", st);
+    platform_phase("kd build");
     CorayKdTree tree;
     st = coray_kdtree_open(arena, arena_bytes, &s->scene, &tree);
     expect(st == CORAY_STATUS_OK, n, "kd open", st);
     CorayShape shape = coray_shape_default();
     st = coray_kdtree_validate(&tree, NULL, 0, &shape);
     expect(st == CORAY_STATUS_OK, n, "kd validate", st);
+    platform_phase("kd validate");
     CorayKdTreeInfo ki = coray_kdtree_info_default();
     coray_kdtree_info(&tree, &ki);
     info(n, "kd arena bytes used", ki.arena_bytes_used);
@@ -266,6 +268,7 @@ static void kd_tree(const BoardScene *s, CorayKdPreset preset, const char *tag) 
         what[k] = 0;
         check(n, what, digest_hits(hits, PIXELS));
     }
+    platform_phase("kd casts");
 
     /* Rays made here: both traversals, as an array and one by one. */
     primary_rays(s);
@@ -302,6 +305,7 @@ static void kd_tree(const BoardScene *s, CorayKdPreset preset, const char *tag) 
         expect(d == occ_first, n, "shadow traversals disagree", 0);
     }
     check(n, "shadow rays", occ_first);
+    platform_phase("kd traversals");
 }
 
 #ifdef EVERY_STRUCTURE
@@ -324,6 +328,7 @@ static void hierarchies(const BoardScene *s) {
     st = coray_bvh_validate(&bvh, stack, sizeof stack, &shape);
     expect(st == CORAY_STATUS_OK, n, "tdbs validate", st);
     check(n, "tdbs shape", digest_shape(&shape));
+    platform_phase("tdbs build and validate");
     st = coray_bvh_intersect(&bvh, rays, hits, PIXELS, stack, sizeof stack, NULL);
     expect(st == CORAY_STATUS_OK, n, "tdbs intersect", st);
     check(n, "primary rays", digest_hits(hits, PIXELS));
@@ -364,6 +369,7 @@ static void hierarchies(const BoardScene *s) {
     st = coray_bvh_validate(&bvh, stack, sizeof stack, &shape);
     expect(st == CORAY_STATUS_OK, n, "rtree validate", st);
     check(n, "rtree shape", digest_shape(&shape));
+    platform_phase("rtree inserts, deletes, validate");
     st = coray_bvh_intersect(&bvh, rays, hits, PIXELS, stack, sizeof stack, NULL);
     expect(st == CORAY_STATUS_OK, n, "rtree intersect", st);
     check(n, "rtree primary rays", digest_hits(hits, PIXELS));
@@ -385,6 +391,7 @@ static void hierarchies(const BoardScene *s) {
     st = coray_proj_intersect(&proj, CORAY_PROJ_SCHEME_2D, rays, hits, PIXELS, stack, sizeof stack, NULL);
     expect(st == CORAY_STATUS_OK, n, "proj intersect", st);
     check(n, "primary rays", digest_hits(hits, PIXELS));
+    platform_phase("bvh and proj traces, proj build");
 }
 #endif
 

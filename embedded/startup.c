@@ -42,6 +42,21 @@ static uint32_t stack_high_water(void) {
     return (uint32_t)((uintptr_t)&_estack - (uintptr_t)p);
 }
 
+static void paint_below_sp(void) {
+    uint32_t *sp;
+    __asm__ volatile("mov %0, sp" : "=r"(sp));
+    for (uint32_t *p = &_sstack; p < sp - 16; p++) *p = PAINT;
+}
+
+void platform_phase(const char *name) {
+    platform_print("board stack ");
+    platform_print(name);
+    platform_print(" bytes ");
+    print_u32(stack_high_water());
+    platform_print("\n");
+    paint_below_sp();
+}
+
 __attribute__((noreturn)) void Reset_Handler(void) {
     /* CP10 and CP11 full access: the FPU, before any float instruction. */
     *(volatile uint32_t *)0xE000ED88u |= 0xFu << 20;
@@ -49,12 +64,11 @@ __attribute__((noreturn)) void Reset_Handler(void) {
     for (uint32_t *s = &_sidata, *d = &_sdata; d < &_edata;) *d++ = *s++;
     for (uint32_t *d = &_sbss; d < &_ebss;) *d++ = 0;
     /* Paint the stack below what this function uses now. */
-    uint32_t *sp;
-    __asm__ volatile("mov %0, sp" : "=r"(sp));
-    for (uint32_t *p = &_sstack; p < sp - 16; p++) *p = PAINT;
+    paint_below_sp();
+    uint32_t before = stack_high_water();
     int status = program();
-    platform_print("board stack high-water bytes ");
-    print_u32(stack_high_water());
+    platform_print("board stack before the program bytes ");
+    print_u32(before);
     platform_print(" of ");
     print_u32((uint32_t)((uintptr_t)&_estack - (uintptr_t)&_sstack));
     platform_print("\n");
