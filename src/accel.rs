@@ -58,6 +58,13 @@ pub trait Accel {
     /// Every structural invariant; never panics, linear time.
     fn validate(&self, stack: &mut [Self::StackItem]) -> Result<Shape, Error>;
 
+    /// Why this structure cannot take `rays` (checked for a whole array
+    /// before any answer is written), or `Ok`. Every ray by default.
+    fn check_rays(&self, rays: &[Ray]) -> Result<(), Error> {
+        let _ = rays;
+        Ok(())
+    }
+
     /// Closest hits of `rays` into `hits` (as long). Nothing is written
     /// unless every ray can be taken.
     fn intersect_many(
@@ -69,6 +76,7 @@ pub trait Accel {
         stats: &mut TraceStats,
     ) -> Result<(), Error> {
         check_lengths(rays.len(), hits.len(), stack.len(), self.stack_len())?;
+        self.check_rays(rays)?;
         for (r, h) in rays.iter().zip(hits.iter_mut()) {
             *h = self.intersect(r, method, stack, stats)?;
         }
@@ -85,6 +93,7 @@ pub trait Accel {
         stats: &mut TraceStats,
     ) -> Result<(), Error> {
         check_lengths(rays.len(), out.len(), stack.len(), self.stack_len())?;
+        self.check_rays(rays)?;
         for (r, o) in rays.iter().zip(out.iter_mut()) {
             *o = self.occluded(r, method, stack, stats)?;
         }
@@ -290,39 +299,11 @@ impl Accel for ProjHierarchy<'_> {
         ProjHierarchy::validate(self, None, stack).map(bvh_shape)
     }
 
-    /// All rays are checked against the plane before any hit is written.
-    fn intersect_many(
-        &self,
-        rays: &[Ray],
-        hits: &mut [Hit],
-        method: ProjScheme,
-        stack: &mut [BvhStackItem],
-        stats: &mut TraceStats,
-    ) -> Result<(), Error> {
-        check_lengths(rays.len(), hits.len(), stack.len(), self.stack_len())?;
+    /// Every ray must lie on a line through the plane's eye: all are
+    /// checked before any answer is written.
+    fn check_rays(&self, rays: &[Ray]) -> Result<(), Error> {
         if rays.iter().any(|r| self.project(r).is_none()) {
             return Err(OFF_PLANE);
-        }
-        for (r, h) in rays.iter().zip(hits.iter_mut()) {
-            *h = Accel::intersect(self, r, method, stack, stats)?;
-        }
-        Ok(())
-    }
-
-    fn occluded_many(
-        &self,
-        rays: &[Ray],
-        out: &mut [bool],
-        method: ProjScheme,
-        stack: &mut [BvhStackItem],
-        stats: &mut TraceStats,
-    ) -> Result<(), Error> {
-        check_lengths(rays.len(), out.len(), stack.len(), self.stack_len())?;
-        if rays.iter().any(|r| self.project(r).is_none()) {
-            return Err(OFF_PLANE);
-        }
-        for (r, o) in rays.iter().zip(out.iter_mut()) {
-            *o = Accel::occluded(self, r, method, stack, stats)?;
         }
         Ok(())
     }

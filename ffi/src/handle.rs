@@ -64,29 +64,22 @@ pub(crate) const KIND_PROJ: u64 = 0x504a;
 const WORDS: usize = 32;
 
 impl Handle {
-    fn seal(&self) -> u64 {
-        let mut h = 0xC0A4_5EA1_0000_0001u64 ^ self.kind;
-        let mut mix = |w: u64| {
-            h = coray::rng::mix64(h ^ w);
-        };
-        mix(self.arena as u64);
-        mix(self.arena_bytes as u64);
-        for w in self.scene {
-            mix(w as u64);
+    /// The seal over words 1 to 27 (kind to extra): one multiply-xorshift
+    /// per word and a final avalanche. It catches a handle the caller
+    /// damaged or never opened (any changed word changes it), at about 4
+    /// instructions a word: every trace call checks it.
+    fn seal_of(w: &[u64; WORDS]) -> u64 {
+        let mut h = 0xC0A4_5EA1_0000_0001u64;
+        for &x in &w[1..28] {
+            h = (h ^ x).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+            h ^= h >> 29;
         }
-        for (o, n) in self.parts {
-            mix((o as u64) << 32 ^ n as u64);
-        }
-        for pair in self.extra.chunks(2) {
-            mix((pair[0] as u64) << 32 | pair[1] as u64);
-        }
-        h
+        coray::rng::mix64(h)
     }
 
     /// The handle as the words a caller keeps.
     pub(crate) fn words(&self) -> [u64; WORDS] {
         let mut w = [0u64; WORDS];
-        w[0] = self.seal();
         w[1] = self.kind;
         w[2] = self.arena as u64;
         w[3] = self.arena_bytes as u64;
@@ -99,11 +92,15 @@ impl Handle {
         for (i, pair) in self.extra.chunks(2).enumerate() {
             w[20 + i] = (pair[0] as u64) << 32 | pair[1] as u64;
         }
+        w[0] = Self::seal_of(&w);
         w
     }
 
     /// The handle in `w`, if its seal holds and it is of `kind`.
     pub(crate) fn from_words(w: &[u64; WORDS], kind: u64) -> Result<Handle, CorayStatus> {
+        if w[1] != kind || Self::seal_of(w) != w[0] {
+            return Err(CorayStatus::InvalidParameter);
+        }
         let mut h = Handle {
             kind: w[1],
             arena: w[2] as usize,
@@ -117,9 +114,6 @@ impl Handle {
         for i in 0..8 {
             h.extra[2 * i] = (w[20 + i] >> 32) as u32;
             h.extra[2 * i + 1] = w[20 + i] as u32;
-        }
-        if h.kind != kind || h.seal() != w[0] {
-            return Err(CorayStatus::InvalidParameter);
         }
         Ok(h)
     }

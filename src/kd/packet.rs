@@ -152,9 +152,24 @@ impl Packet {
 
 /// What a packet does at its leaves: closest hit or any hit.
 pub(crate) trait PacketVisitor {
+    /// One answer per ray: a [`Hit`] or an occlusion flag.
+    type Answer;
+    /// A fresh visitor for packet `p`.
+    fn new(p: &Packet) -> Self;
     /// Tests `refs` for the lanes `on` (their segments end at `exit`);
     /// returns the lanes that are done.
     fn visit(&mut self, tree: &KdTree, p: &Packet, refs: &[u32], on: M8, exit: F8) -> M8;
+    /// Primitive tests done.
+    fn tests(&self) -> u64;
+    /// Writes the lanes' answers to `out` (one per ray of the packet).
+    fn answers(&self, out: &mut [Self::Answer]);
+    /// The answer for a ray that cannot join a packet: hierarchical traversal.
+    fn single(
+        tree: &KdTree,
+        ray: &Ray,
+        stack: &mut [KdStackItem],
+        stats: &mut TraceStats,
+    ) -> Self::Answer;
 }
 
 /// Closest hits, one per lane: the best distance of each lane in a lane
@@ -169,15 +184,6 @@ pub(crate) struct ClosestLanes {
 }
 
 impl ClosestLanes {
-    pub(crate) fn new(p: &Packet) -> ClosestLanes {
-        ClosestLanes {
-            best: [Hit::MISS; LANES],
-            t_max: p.t_max,
-            found: M8::NONE,
-            tests: 0,
-        }
-    }
-
     /// Keeps `h` for lane `i` by the single ray's rule.
     #[inline(always)]
     fn offer(&mut self, i: usize, h: Hit) {
@@ -195,16 +201,6 @@ pub(crate) struct AnyLanes {
     pub hit: M8,
     t_max: F8,
     pub tests: u64,
-}
-
-impl AnyLanes {
-    pub(crate) fn new(p: &Packet) -> AnyLanes {
-        AnyLanes {
-            hit: M8::NONE,
-            t_max: p.t_max,
-            tests: 0,
-        }
-    }
 }
 
 /// Woop's watertight test of one triangle against eight rays, lane by
@@ -441,6 +437,29 @@ fn cone8(p: &Packet, cone: &crate::Cone, on: M8, t_max: F8) -> (M8, F8, F8, [F8;
 }
 
 impl PacketVisitor for ClosestLanes {
+    type Answer = Hit;
+
+    fn new(p: &Packet) -> ClosestLanes {
+        ClosestLanes {
+            best: [Hit::MISS; LANES],
+            t_max: p.t_max,
+            found: M8::NONE,
+            tests: 0,
+        }
+    }
+
+    fn tests(&self) -> u64 {
+        self.tests
+    }
+
+    fn answers(&self, out: &mut [Hit]) {
+        out.copy_from_slice(&self.best[..out.len()]);
+    }
+
+    fn single(tree: &KdTree, ray: &Ray, stack: &mut [KdStackItem], stats: &mut TraceStats) -> Hit {
+        tree.intersect(ray, super::Traversal::Hierarchical, stack, stats)
+    }
+
     #[inline(always)]
     fn visit(&mut self, tree: &KdTree, p: &Packet, refs: &[u32], on: M8, exit: F8) -> M8 {
         let scene = &tree.scene;
@@ -528,6 +547,30 @@ impl PacketVisitor for ClosestLanes {
 }
 
 impl PacketVisitor for AnyLanes {
+    type Answer = bool;
+
+    fn new(p: &Packet) -> AnyLanes {
+        AnyLanes {
+            hit: M8::NONE,
+            t_max: p.t_max,
+            tests: 0,
+        }
+    }
+
+    fn tests(&self) -> u64 {
+        self.tests
+    }
+
+    fn answers(&self, out: &mut [bool]) {
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = self.hit.get(i);
+        }
+    }
+
+    fn single(tree: &KdTree, ray: &Ray, stack: &mut [KdStackItem], stats: &mut TraceStats) -> bool {
+        tree.occluded(ray, super::Traversal::Hierarchical, stack, stats)
+    }
+
     #[inline(always)]
     fn visit(&mut self, tree: &KdTree, p: &Packet, refs: &[u32], on: M8, _: F8) -> M8 {
         let scene = &tree.scene;
@@ -735,7 +778,7 @@ impl KdTree<'_> {
         stack: &mut [KdStackItem],
         stats: &mut TraceStats,
     ) {
-        self.packets_closest(rays, hits, stack, stats);
+        self.packets::<ClosestLanes>(rays, hits, stack, stats);
     }
 
     /// [`KdTree::intersect_packets`] compiled for AVX2: the same hits, bit
@@ -752,7 +795,7 @@ impl KdTree<'_> {
         stack: &mut [KdStackItem],
         stats: &mut TraceStats,
     ) {
-        self.packets_closest(rays, hits, stack, stats);
+        self.packets::<ClosestLanes>(rays, hits, stack, stats);
     }
 
     /// Any-hit answers of `rays` into `occluded`, packets as
@@ -767,7 +810,7 @@ impl KdTree<'_> {
         stack: &mut [KdStackItem],
         stats: &mut TraceStats,
     ) {
-        self.packets_any(rays, occluded, stack, stats);
+        self.packets::<AnyLanes>(rays, occluded, stack, stats);
     }
 
     /// [`KdTree::occluded_packets`] compiled for AVX2.
@@ -783,60 +826,33 @@ impl KdTree<'_> {
         stack: &mut [KdStackItem],
         stats: &mut TraceStats,
     ) {
-        self.packets_any(rays, occluded, stack, stats);
+        self.packets::<AnyLanes>(rays, occluded, stack, stats);
     }
 
+    /// Answers of `rays` into `out` (as many): packets of 8 where the rays
+    /// move alike, ray by ray hierarchically elsewhere.
     #[inline(always)]
-    fn packets_closest(
+    fn packets<V: PacketVisitor>(
         &self,
         rays: &[Ray],
-        hits: &mut [Hit],
+        out: &mut [V::Answer],
         stack: &mut [KdStackItem],
         stats: &mut TraceStats,
     ) {
-        assert!(hits.len() >= rays.len() && stack.len() >= KD_STACK_LEN);
+        assert!(out.len() >= rays.len() && stack.len() >= KD_STACK_LEN);
         let mut p = Packet::EMPTY;
-        for (rs, hs) in rays.chunks(LANES).zip(hits.chunks_mut(LANES)) {
+        for (rs, os) in rays.chunks(LANES).zip(out.chunks_mut(LANES)) {
             if p.load(rs) {
-                let mut v = ClosestLanes::new(&p);
+                let mut v = V::new(&p);
                 let mut steps = Steps::default();
                 self.walk_packet(&p, &mut v, stack, &mut steps);
                 steps.flush(stats);
                 stats.rays += rs.len() as u64;
-                stats.prim_tests += v.tests;
-                hs.copy_from_slice(&v.best[..rs.len()]);
-            } else {
-                for (r, h) in rs.iter().zip(hs.iter_mut()) {
-                    *h = self.intersect(r, super::Traversal::Hierarchical, stack, stats);
-                }
-            }
-        }
-    }
-
-    #[inline(always)]
-    fn packets_any(
-        &self,
-        rays: &[Ray],
-        occluded: &mut [bool],
-        stack: &mut [KdStackItem],
-        stats: &mut TraceStats,
-    ) {
-        assert!(occluded.len() >= rays.len() && stack.len() >= KD_STACK_LEN);
-        let mut p = Packet::EMPTY;
-        for (rs, os) in rays.chunks(LANES).zip(occluded.chunks_mut(LANES)) {
-            if p.load(rs) {
-                let mut v = AnyLanes::new(&p);
-                let mut steps = Steps::default();
-                self.walk_packet(&p, &mut v, stack, &mut steps);
-                steps.flush(stats);
-                stats.rays += rs.len() as u64;
-                stats.prim_tests += v.tests;
-                for (i, o) in os.iter_mut().enumerate() {
-                    *o = v.hit.get(i);
-                }
+                stats.prim_tests += v.tests();
+                v.answers(&mut os[..rs.len()]);
             } else {
                 for (r, o) in rs.iter().zip(os.iter_mut()) {
-                    *o = self.occluded(r, super::Traversal::Hierarchical, stack, stats);
+                    *o = V::single(self, r, stack, stats);
                 }
             }
         }
