@@ -84,7 +84,9 @@ impl<'s> Built<'s> {
                 b.inner = Inner::Kd(o, traversal);
             }
             Method::Cast { .. } => {
-                return Err(format!("{method} casts images: use it with `coray bench`"))
+                return Err(format!(
+                    "{method} casts images: use it with `coray bench`, or for the eye rays of `coray render --spd`"
+                ))
             }
             Method::Bvh { build, .. } => {
                 let mut o = OwnedBvh::with_room(scene.prim_count(), build);

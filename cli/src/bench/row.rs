@@ -356,17 +356,7 @@ pub fn run_cast(
         cs = Some(c?);
     }
     let (rs, cs) = (rs.expect("ran"), cs.expect("ran"));
-    let differ: Vec<usize> = (0..n)
-        .filter(|&i| {
-            let (a, b) = (&hits[i], &reference[i]);
-            (a.geom_id, a.prim_id, a.t.to_bits()) != (b.geom_id, b.prim_id, b.t.to_bits())
-        })
-        .collect();
-    let ties = differ
-        .iter()
-        .filter(|&&i| hits[i].is_hit() && reference[i].is_hit())
-        .filter(|&&i| coray::tolerance::near_tie(hits[i].t, reference[i].t))
-        .count();
+    let (mismatches, ties) = cast_agreement(&hits, &reference);
     let rays = n.max(1) as f64;
     Ok(Row {
         method: name.to_string(),
@@ -376,7 +366,7 @@ pub fn run_cast(
         primary_rays: n,
         tspr: Some(cs.trace.traversal_steps as f64 / rays),
         isect_per_ray: Some(cs.trace.prim_tests as f64 / rays),
-        mismatches: differ.len() - ties,
+        mismatches,
         ties,
         gamma: (!matches!(scheme, Scheme::Hierarchical | Scheme::Ropes)).then(|| cs.gamma()),
         reference: Some(Reference {
@@ -385,6 +375,21 @@ pub fn run_cast(
         }),
         ..Row::default()
     })
+}
+
+/// How an image cast agrees with the hierarchical cast of the same pixels:
+/// (mismatches, ties). Any bit of difference counts, except two hits on
+/// different primitives at t within rounding of each other
+/// ([`coray::tolerance::near_tie`]), which are ties.
+pub fn cast_agreement(hits: &[Hit], reference: &[Hit]) -> (usize, usize) {
+    let (mut differ, mut ties) = (0, 0);
+    for (a, b) in hits.iter().zip(reference) {
+        if (a.geom_id, a.prim_id, a.t.to_bits()) != (b.geom_id, b.prim_id, b.t.to_bits()) {
+            differ += 1;
+            ties += (a.is_hit() && b.is_hit() && coray::tolerance::near_tie(a.t, b.t)) as usize;
+        }
+    }
+    (differ - ties, ties)
 }
 
 /// The workload of a scene: its primary rays, the reference's hits, the

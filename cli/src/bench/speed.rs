@@ -213,14 +213,7 @@ pub fn run(
                         r.map_err(|e| e.to_string())?;
                         best[si][built.len() + ci] = best[si][built.len() + ci].min(secs);
                         if rep == 0 {
-                            let n = (0..cast_ref.len())
-                                .filter(|&i| {
-                                    let (a, b) = (&cast_hits[i], &cast_ref[i]);
-                                    (a.geom_id, a.prim_id, a.t.to_bits())
-                                        != (b.geom_id, b.prim_id, b.t.to_bits())
-                                })
-                                .count();
-                            judged[si].push((n, 0));
+                            judged[si].push(super::row::cast_agreement(&cast_hits, &cast_ref));
                         }
                     }
                 }
