@@ -244,7 +244,8 @@ fn render_spd(
 
 /// The paper tables of `bench --table`, with what each shows: the help
 /// text and the error list both come from here.
-const TABLES: [(&str, &str); 7] = [
+const TABLES: [(&str, &str); 8] = [
+    ("build", "build ms and bytes per primitive of kd-auto, kd-paper, tdbs-sah and Embree (1 thread and --threads N), builders interleaved; SCENE as for speed"),
     ("speed", "every method's Mrays/s per ray set against Embree's one-ray and packet calls; SCENE a list, `spd:all` or default the eight SPD scenes and random; at 1 thread and at --threads N"),
     ("lcts", "Havran and Bittner's Table 2: SCENE may be a comma-separated list, or `spd:all`"),
     ("lcts-res", "their Table 3: SCENE (default spd:teapot) at 256 to --max-res pixels square"),
@@ -306,6 +307,20 @@ fn parse_res(s: &str) -> Result<(u64, u64), String> {
             .map_err(|_| format!("bad resolution `{s}` (WxH or N)"))
     };
     Ok((p(w)?, p(h)?))
+}
+
+/// The scenes of `--table speed|build`: the default (`random`) is the
+/// eight SPD scenes and random, `spd:all` the eight SPD scenes, else a
+/// comma-separated list.
+fn table_scenes(scene: &str) -> Vec<String> {
+    match scene {
+        "random" | "spd:all" => lcts_table::SPD_SCENES
+            .iter()
+            .map(|n| format!("spd:{n}"))
+            .chain((scene == "random").then(|| "random".to_string()))
+            .collect(),
+        _ => scene.split(',').map(str::to_string).collect(),
+    }
 }
 
 /// A scene with its camera set to `res` x `res` pixels, its memory for
@@ -547,15 +562,23 @@ fn paper_table(
 ) -> Result<(), String> {
     let one = Settings { threads: 1, ..*set };
     match table {
+        "build" => {
+            let mut rows = Vec::new();
+            for name in &table_scenes(scene) {
+                let s = load_square(name, res, opts)?;
+                rows.push(bench::build::run(&s, set.repeat, set.threads)?);
+            }
+            if json {
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(&rows).map_err(|e| e.to_string())?
+                );
+            } else {
+                bench::build::print(&rows);
+            }
+        }
         "speed" => {
-            let scenes: Vec<String> = match scene {
-                "random" | "spd:all" => lcts_table::SPD_SCENES
-                    .iter()
-                    .map(|n| format!("spd:{n}"))
-                    .chain((scene == "random").then(|| "random".to_string()))
-                    .collect(),
-                _ => scene.split(',').map(str::to_string).collect(),
-            };
+            let scenes = table_scenes(scene);
             let mut counts = vec![1];
             if set.threads > 1 {
                 counts.push(set.threads);

@@ -674,3 +674,40 @@ fn export_writes_the_scene_as_c_arrays() {
     assert_eq!(code, 2);
     assert!(err.contains("C identifier"), "{err}");
 }
+
+/// `bench --table build`: one row per scene, every builder, Embree at one
+/// thread and at --threads N, bytes per primitive from each.
+#[test]
+fn build_table_has_every_builder() {
+    let d = tmp("build-table");
+    let (code, out, err) = coray(
+        &[
+            "bench", "--table", "build", "spd:tetra:2,spd:balls:1", "--repeat", "1", "--threads",
+            "2", "--json",
+        ],
+        &d,
+    );
+    assert_eq!(code, 0, "{err}");
+    let v = json(&out);
+    let rows = v.as_array().unwrap();
+    assert_eq!(rows.len(), 2);
+    assert_eq!(rows[0]["scene"], "spd:tetra:2");
+    assert_eq!(rows[0]["prims"], 16);
+    // balls 1: 10 spheres and a floor polygon of 2 triangles.
+    assert_eq!(rows[1]["prims"], 12);
+    let names: Vec<&str> = rows[0]["cells"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c["builder"].as_str().unwrap())
+        .collect();
+    let mut want = vec!["kd-auto", "kd-paper", "tdbs-sah"];
+    if cfg!(feature = "embree") {
+        want.extend(["embree (1 thr)", "embree (2 thr)"]);
+    }
+    assert_eq!(names, want);
+    for c in rows[0]["cells"].as_array().unwrap() {
+        assert!(c["bytes_per_prim"].as_f64().unwrap() > 0.0, "{c}");
+        assert!(c["ms"].as_f64().unwrap() >= 0.0, "{c}");
+    }
+}

@@ -4,6 +4,7 @@
 //! each their own module; the paper tables live in `lcts_table` and
 //! `series`.
 
+pub mod build;
 pub mod harness;
 pub mod rays;
 pub mod report;

@@ -21,6 +21,11 @@ pub struct EmbreeScene {
     /// Bytes Embree's device holds (allocations less releases) and the
     /// most it held, as its memory monitor reports them.
     memory: Box<Memory>,
+    /// Seconds `rtcCommitScene` took: the build alone (device creation and
+    /// the copies of the scene's arrays into Embree's buffers excluded).
+    commit_secs: f64,
+    /// Bytes the device held just before the commit (the scene's copies).
+    before_commit: i64,
 }
 
 /// What the memory monitor saw.
@@ -129,11 +134,16 @@ impl EmbreeScene {
                 rtcAttachGeometryByID(scene, g, coray::geom::GEOM_CONES);
                 rtcReleaseGeometry(g);
             }
+            let before_commit = memory.now.load(std::sync::atomic::Ordering::Relaxed);
+            let t = std::time::Instant::now();
             rtcCommitScene(scene);
+            let commit_secs = t.elapsed().as_secs_f64();
             EmbreeScene {
                 device,
                 scene,
                 memory,
+                commit_secs,
+                before_commit,
             }
         }
     }
@@ -147,6 +157,20 @@ impl EmbreeScene {
         (
             m.now.load(Relaxed).max(0) as u64,
             m.peak.load(Relaxed).max(0) as u64,
+        )
+    }
+
+    /// The build as `rtcCommitScene` did it: (seconds, bytes the device
+    /// holds for the hierarchy once built, the most it held above the
+    /// scene's copies during the build), per the memory monitor.
+    pub fn build_cost(&self) -> (f64, u64, u64) {
+        use std::sync::atomic::Ordering::Relaxed;
+        let m = &self.memory;
+        let (now, peak) = (m.now.load(Relaxed), m.peak.load(Relaxed));
+        (
+            self.commit_secs,
+            (now - self.before_commit).max(0) as u64,
+            (peak - self.before_commit).max(0) as u64,
         )
     }
 

@@ -1,0 +1,181 @@
+//! `coray bench --table build`: what a build costs, coray's structures
+//! beside Embree's, in one run: milliseconds (best of the repeats, the
+//! builders interleaved) and bytes per primitive. coray's bytes are the
+//! arena its requirements ask for (the tree) and the scratch the build
+//! borrows; Embree's are what its device memory monitor saw the commit
+//! allocate (kept, and the most held during it), the scene's own copies
+//! excluded. Embree builds at one thread and at `--threads N`; coray's
+//! builds are single-threaded.
+
+use crate::method::Preset;
+use coray::owned::{OwnedBvh, OwnedKd};
+use coray::Scene;
+use serde::Serialize;
+use std::time::Instant;
+
+/// One builder on one scene.
+#[derive(Clone, Debug, Serialize)]
+pub struct BuildCell {
+    /// The builder: kd-auto, kd-paper, tdbs-sah, embree (threads).
+    pub builder: String,
+    /// Best build time (ms).
+    pub ms: f64,
+    /// Bytes the structure keeps, per primitive.
+    pub bytes_per_prim: f64,
+    /// Bytes the build borrows beyond that (coray's scratch; Embree's peak
+    /// above what it keeps), per primitive.
+    pub scratch_per_prim: f64,
+    /// A kd build that ran out of room.
+    pub truncated: bool,
+}
+
+/// One scene: every builder.
+#[derive(Clone, Debug, Serialize)]
+pub struct BuildRow {
+    /// The scene.
+    pub scene: String,
+    /// Primitives after triangulation.
+    pub prims: usize,
+    /// Every builder.
+    pub cells: Vec<BuildCell>,
+}
+
+fn kd(scene: &Scene, preset: Preset, name: &str) -> Result<(f64, BuildCell), String> {
+    let params = preset.params();
+    let req = coray::kd::requirements(scene.prim_count(), &params);
+    let mut o = OwnedKd::with_room(&req);
+    let t = Instant::now();
+    o.build(scene, &params)
+        .map_err(|e| format!("{name}: {e}"))?;
+    let ms = t.elapsed().as_secs_f64() * 1e3;
+    let n = scene.prim_count().max(1) as f64;
+    Ok((
+        ms,
+        BuildCell {
+            builder: name.into(),
+            ms,
+            bytes_per_prim: o.arena_bytes() as f64 / n,
+            scratch_per_prim: coray::kd::layout::KdScratchLayout::of(&req)
+                .map_or(0, |l| l.total_bytes) as f64
+                / n,
+            truncated: o.info().truncated(),
+        },
+    ))
+}
+
+fn tdbs_sah(scene: &Scene) -> Result<(f64, BuildCell), String> {
+    let how = coray::owned::BvhBuild::Static(coray::bvh::Builder::TdbsSah, 1);
+    let mut o = OwnedBvh::with_room(scene.prim_count(), how);
+    let t = Instant::now();
+    o.build(scene).map_err(|e| format!("tdbs-sah: {e}"))?;
+    let ms = t.elapsed().as_secs_f64() * 1e3;
+    let n = scene.prim_count().max(1) as f64;
+    Ok((
+        ms,
+        BuildCell {
+            builder: "tdbs-sah".into(),
+            ms,
+            bytes_per_prim: o.bytes() as f64 / n,
+            scratch_per_prim: 0.0,
+            truncated: false,
+        },
+    ))
+}
+
+#[cfg(feature = "embree")]
+fn embree(scene: &Scene, threads: usize) -> Result<(f64, BuildCell), String> {
+    let e = coray_embree::EmbreeScene::new(scene, Some(threads as u32));
+    let (secs, kept, peak) = e.build_cost();
+    let n = scene.prim_count().max(1) as f64;
+    Ok((
+        secs * 1e3,
+        BuildCell {
+            builder: format!("embree ({threads} thr)"),
+            ms: secs * 1e3,
+            bytes_per_prim: kept as f64 / n,
+            scratch_per_prim: peak.saturating_sub(kept) as f64 / n,
+            truncated: false,
+        },
+    ))
+}
+
+/// Builds every builder `repeat` times in turn on `s`; the best time of
+/// each counts. Embree at 1 thread and, when `threads` > 1, at `threads`.
+pub fn run(s: &crate::scene::SceneData, repeat: usize, threads: usize) -> Result<BuildRow, String> {
+    type Builder<'a> = Box<dyn Fn(&Scene) -> Result<(f64, BuildCell), String> + 'a>;
+    let mut builders: Vec<Builder> = vec![
+        Box::new(|sc| kd(sc, Preset::Auto, "kd-auto")),
+        Box::new(|sc| kd(sc, Preset::Paper, "kd-paper")),
+        Box::new(tdbs_sah),
+    ];
+    if cfg!(feature = "embree") {
+        #[cfg(feature = "embree")]
+        {
+            builders.push(Box::new(|sc| embree(sc, 1)));
+            if threads > 1 {
+                builders.push(Box::new(move |sc| embree(sc, threads)));
+            }
+        }
+    }
+    let _ = threads;
+    let scene = s.mesh.scene();
+    let mut cells: Vec<Option<BuildCell>> = vec![None; builders.len()];
+    for _ in 0..repeat.max(1) {
+        for (b, cell) in builders.iter().zip(cells.iter_mut()) {
+            let (ms, c) = b(&scene)?;
+            if cell.as_ref().is_none_or(|best| ms < best.ms) {
+                *cell = Some(c);
+            }
+        }
+    }
+    Ok(BuildRow {
+        scene: s.name.clone(),
+        prims: scene.prim_count(),
+        cells: cells.into_iter().map(|c| c.expect("built")).collect(),
+    })
+}
+
+/// The legend under the table.
+pub const LEGEND: &str = "\
+columns: prims = primitives after triangulation; per builder: ms = best build time of
+  --repeat runs (builders interleaved; Embree: rtcCommitScene alone, device and buffer
+  copies excluded), B/p = bytes the structure keeps per primitive (coray: the arena its
+  requirements ask for; Embree: what its memory monitor saw the commit keep), +s = bytes
+  per primitive the build borrows beyond that (coray: scratch; Embree: its peak above
+  what it keeps), T = a kd build that ran out of room; x = kd-auto's time over Embree's
+  at one thread.";
+
+/// Prints the rows.
+pub fn print(rows: &[BuildRow]) {
+    let Some(first) = rows.first() else { return };
+    let mut head = format!("{:<14} {:>7}", "scene", "prims");
+    for c in &first.cells {
+        head += &format!(" | {:>22}", c.builder);
+    }
+    head += " |      x";
+    println!("{head}");
+    let mut sub = format!("{:<14} {:>7}", "", "");
+    for _ in &first.cells {
+        sub += &format!(" | {:>8} {:>6} {:>6}", "ms", "B/p", "+s");
+    }
+    println!("{sub}");
+    for r in rows {
+        let mut line = format!("{:<14} {:>7}", r.scene, r.prims);
+        for c in &r.cells {
+            line += &format!(
+                " | {:>7.1}{} {:>6.0} {:>6.0}",
+                c.ms,
+                if c.truncated { "T" } else { " " },
+                c.bytes_per_prim,
+                c.scratch_per_prim
+            );
+        }
+        let e1 = r.cells.iter().find(|c| c.builder == "embree (1 thr)");
+        match e1 {
+            Some(e) => line += &format!(" | {:>6.1}", r.cells[0].ms / e.ms.max(1e-9)),
+            None => line += " |      -",
+        }
+        println!("{line}");
+    }
+    println!("{LEGEND}");
+}
