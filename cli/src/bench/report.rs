@@ -26,8 +26,8 @@ fn opt(v: Option<f64>, p: usize) -> String {
 
 /// The legend under the method table.
 pub const LEGEND: &str = "\
-columns: build ms = build time; arena B = bytes of the structure (a C arena's for coray);
-  B/prim = arena B per primitive; prim/shad Mr/s = millions of primary / shadow rays per
+columns: build ms = build time (Embree: rtcCommitScene alone); arena B = bytes of the
+  structure (a C arena's for coray); B/prim = arena B per primitive; prim/shad Mr/s = millions of primary / shadow rays per
   second (best of --repeat runs); TSPR = traversal steps (nodes visited) per primary ray;
   isect/r = ray-primitive tests per primary ray; alpha = TSPR and eta = time relative to
   the kd-tree's hierarchical traversal (for LCTS casts: to the hierarchical cast of the
