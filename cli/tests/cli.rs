@@ -682,8 +682,15 @@ fn build_table_has_every_builder() {
     let d = tmp("build-table");
     let (code, out, err) = coray(
         &[
-            "bench", "--table", "build", "spd:tetra:2,spd:balls:1", "--repeat", "1", "--threads",
-            "2", "--json",
+            "bench",
+            "--table",
+            "build",
+            "spd:tetra:2,spd:balls:1",
+            "--repeat",
+            "1",
+            "--threads",
+            "2",
+            "--json",
         ],
         &d,
     );

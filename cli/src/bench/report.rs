@@ -27,14 +27,14 @@ fn opt(v: Option<f64>, p: usize) -> String {
 /// The legend under the method table.
 pub const LEGEND: &str = "\
 columns: build ms = build time (Embree: rtcCommitScene alone); arena B = bytes of the
-  structure (a C arena's for coray); B/prim = arena B per primitive; prim/shad Mr/s = millions of primary / shadow rays per
-  second (best of --repeat runs); TSPR = traversal steps (nodes visited) per primary ray;
-  isect/r = ray-primitive tests per primary ray; alpha = TSPR and eta = time relative to
-  the kd-tree's hierarchical traversal (for LCTS casts: to the hierarchical cast of the
-  same pixels, timed in turn); vs embree = primary speed over Embree's rtcIntersect1;
-  mismatch = rays whose answer differs from the reference beyond the tie rules
-  (coray::tolerance); ties = differences the rules explain; trunc = the kd build ran
-  out of room. docs/design.md defines every metric.";
+  structure (a C arena's for coray); B/prim = arena B per primitive; prim/shad Mr/s =
+  millions of primary / shadow rays per second (best of --repeat runs); TSPR = traversal
+  steps (nodes visited) per primary ray; isect/r = ray-primitive tests per primary ray;
+  alpha = TSPR and eta = time relative to the kd-tree's hierarchical traversal (for LCTS
+  casts: to the hierarchical cast of the same pixels, timed in turn); vs embree = primary
+  speed over Embree's rtcIntersect1; mismatch = rays whose answer differs from the
+  reference beyond the tie rules (coray::tolerance); ties = differences the rules
+  explain; trunc = the kd build ran out of room. docs/design.md defines every metric.";
 
 /// Prints the method table.
 pub fn print_table(s: &SceneData, rows: &[Row], threads: usize) {
