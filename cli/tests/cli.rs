@@ -286,7 +286,7 @@ fn bench_paper_tables() {
     assert_eq!(code, 2);
     assert!(
         err.contains(
-            "unknown --table `nope` (have: speed, lcts, lcts-res, bvh, proj, bvh-series, proj-series)"
+            "unknown --table `nope` (have: build, speed, lcts, lcts-res, bvh, proj, bvh-series, proj-series)"
         ),
         "{err}"
     );
@@ -547,7 +547,7 @@ fn bad_inputs_get_a_message_and_status_2() {
         ),
         (
             &["bench", "--table", "bogus"],
-            "have: speed, lcts, lcts-res, bvh, proj, bvh-series, proj-series",
+            "have: build, speed, lcts, lcts-res, bvh, proj, bvh-series, proj-series",
         ),
         (
             &["bench", "--table", "bvh-series", "--plot", "c.svg"],
