@@ -228,6 +228,46 @@ unsafe impl Versioned for CorayTraceStats {
     const SIZE_1_0: usize = core::mem::size_of::<Self>();
 }
 
+// CorayRay and Ray, CorayHit and Hit: the same fields at the same offsets
+// (repr(C), f32 and u32 throughout), so the caller's arrays are traced in
+// place (`core_rays`, `core_hits`). Checked at compile time.
+const _: () = {
+    use core::mem::{align_of, offset_of, size_of};
+    assert!(
+        size_of::<CorayRay>() == size_of::<Ray>() && align_of::<CorayRay>() == align_of::<Ray>()
+    );
+    assert!(offset_of!(CorayRay, org) == offset_of!(Ray, origin));
+    assert!(offset_of!(CorayRay, tnear) == offset_of!(Ray, t_min));
+    assert!(offset_of!(CorayRay, dir) == offset_of!(Ray, dir));
+    assert!(offset_of!(CorayRay, tfar) == offset_of!(Ray, t_max));
+    assert!(
+        size_of::<CorayHit>() == size_of::<Hit>() && align_of::<CorayHit>() == align_of::<Hit>()
+    );
+    assert!(offset_of!(CorayHit, t) == offset_of!(Hit, t));
+    assert!(offset_of!(CorayHit, u) == offset_of!(Hit, u));
+    assert!(offset_of!(CorayHit, v) == offset_of!(Hit, v));
+    assert!(offset_of!(CorayHit, ng) == offset_of!(Hit, ng));
+    assert!(offset_of!(CorayHit, geom_id) == offset_of!(Hit, geom_id));
+    assert!(offset_of!(CorayHit, prim_id) == offset_of!(Hit, prim_id));
+    assert!(size_of::<Vec3>() == 12 && align_of::<Vec3>() == 4);
+};
+
+/// The caller's rays as the core's, without a copy.
+pub(crate) fn core_rays(r: &[CorayRay]) -> &[Ray] {
+    // SAFETY: CorayRay and Ray have the same size, alignment and fields
+    // (f32s at the same offsets, asserted above), and every bit pattern is
+    // a valid f32: the same memory is a valid [Ray] of the same length,
+    // borrowed for the same lifetime.
+    unsafe { core::slice::from_raw_parts(r.as_ptr().cast::<Ray>(), r.len()) }
+}
+
+/// The caller's hit array as the core's, written in place.
+pub(crate) fn core_hits(h: &mut [CorayHit]) -> &mut [Hit] {
+    // SAFETY: as in core_rays (f32 and u32 fields at the same offsets, any
+    // bit pattern valid), and the unique borrow passes on for its lifetime.
+    unsafe { core::slice::from_raw_parts_mut(h.as_mut_ptr().cast::<Hit>(), h.len()) }
+}
+
 impl From<&CorayRay> for Ray {
     #[inline]
     fn from(r: &CorayRay) -> Ray {
@@ -292,6 +332,37 @@ pub extern "C" fn coray_trace_stats_default() -> CorayTraceStats {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn caller_arrays_read_and_write_as_the_cores() {
+        let r = CorayRay {
+            org: [1.0, 2.0, 3.0],
+            tnear: 0.5,
+            dir: [4.0, 5.0, 6.0],
+            tfar: 7.5,
+        };
+        let rays = [r, r];
+        let core = core_rays(&rays);
+        assert_eq!(core.len(), 2);
+        assert_eq!(core[1], Ray::from(&r));
+        let h = Hit {
+            t: 2.0,
+            u: 0.25,
+            v: 0.5,
+            ng: Vec3::new(0.0, 1.0, 0.0),
+            geom_id: 1,
+            prim_id: 7,
+        };
+        let mut hits = [CorayHit::default(); 3];
+        core_hits(&mut hits)[2] = h;
+        let c = hits[2];
+        assert_eq!(
+            (c.t, c.u, c.v, c.ng, c.geom_id, c.prim_id),
+            (2.0, 0.25, 0.5, [0.0, 1.0, 0.0], 1, 7)
+        );
+        assert_eq!(hits[0].t, 0.0);
+    }
+
     use super::*;
     use core::mem::size_of;
 

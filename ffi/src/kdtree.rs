@@ -9,7 +9,7 @@ use crate::{guard, CorayKdTree, CorayStatus};
 use coray::kd::layout::{KdArenaHeader, KdArenaLayout, KdScratchLayout, KD_HEADER_BYTES};
 use coray::kd::{self, KdStackItem, KdTree, Traversal, KD_STACK_LEN, PACKET_LANES};
 use coray::limits::MAX_PRIMS;
-use coray::{Accel, Hit, TraceStats, Vec3};
+use coray::{Accel, TraceStats};
 use core::ffi::c_void;
 use core::mem::size_of;
 
@@ -387,8 +387,25 @@ pub(crate) unsafe fn open<'a>(
     t: *const CorayKdTree,
     regions: &mut Regions,
 ) -> Result<KdTree<'a>, CorayStatus> {
+    // SAFETY: forwarded contract. The handle is not returned (every trace
+    // call opens one: no copy of it leaves this frame).
+    unsafe {
+        let h = handle::read(t.cast(), KIND_KD, regions)?;
+        view(&h, regions)
+    }
+}
+
+/// The tree a handle read from the caller describes, its arena and scene
+/// noted in `regions`.
+///
+/// Safety: as [`open`], for the handle `h` was read from.
+unsafe fn view<'a>(h: &Handle, regions: &mut Regions) -> Result<KdTree<'a>, CorayStatus> {
     // SAFETY: forwarded contract.
-    unsafe { open_handle(t, regions).map(|(_, t)| t) }
+    unsafe {
+        regions.add(h.arena as *const u8, h.arena_bytes, false);
+        let scene = h.scene(regions);
+        tree_of(h, scene)
+    }
 }
 
 /// [`open`], with the handle (whose `arena_bytes` is the layout's size).
@@ -401,9 +418,8 @@ unsafe fn open_handle<'a>(
     // SAFETY: forwarded contract.
     unsafe {
         let h = handle::read(t.cast(), KIND_KD, regions)?;
-        regions.add(h.arena as *const u8, h.arena_bytes, false);
-        let scene = h.scene(regions);
-        Ok((h, tree_of(&h, scene)?))
+        let t = view(&h, regions)?;
+        Ok((h, t))
     }
 }
 
@@ -522,14 +538,11 @@ unsafe fn batch<O>(
         };
         regions.check()?;
         let mut st = TraceStats::default();
-        // Groups of 8: what a packet takes (the other traversals trace
-        // them ray by ray).
-        let mut group = [coray::Ray::new(Vec3::ZERO, Vec3::ZERO, 0.0, 0.0); PACKET_LANES];
+        // The caller's rays traced in place, in groups of 8: what a packet
+        // takes (the other traversals trace them ray by ray).
+        let rays = crate::abi::core_rays(rays);
         for (rs, os) in rays.chunks(PACKET_LANES).zip(out.chunks_mut(PACKET_LANES)) {
-            for (g, r) in group.iter_mut().zip(rs) {
-                *g = r.into();
-            }
-            answer(&t, &group[..rs.len()], os, method, stk, &mut st)?;
+            answer(&t, rs, os, method, stk, &mut st)?;
         }
         if st.faults > 0 {
             return Err(CorayStatus::CorruptArena);
@@ -570,15 +583,12 @@ pub unsafe extern "C" fn coray_kdtree_intersect(
             stack_bytes,
             stats,
             |t, rays, out, m, s, st| {
-                let mut hits = [Hit::MISS; PACKET_LANES];
-                let hits = &mut hits[..rays.len()];
+                // Hits written in place: the caller's array is the core's.
+                let hits = crate::abi::core_hits(out);
                 if cfg!(feature = "packets") && m == Traversal::Packets {
                     crate::simd::intersect_packets(t, rays, hits, s, st);
                 } else {
                     Accel::intersect_many(t, rays, hits, m, s, st)?;
-                }
-                for (o, h) in out.iter_mut().zip(hits.iter()) {
-                    *o = (*h).into();
                 }
                 Ok(())
             },
