@@ -30,6 +30,9 @@ pub struct Rules {
     /// that light's plane); off, they do not, and projection methods choose
     /// a plane as the thesis' uniform mode does.
     pub name_lights: bool,
+    /// Eye rays start at the scene's hither distance (true) or at the eye
+    /// (the SPD procedure has no hither; LCTS casts start at the eye too).
+    pub eye_from_hither: bool,
 }
 
 impl Rules {
@@ -39,6 +42,7 @@ impl Rules {
         one_sided: false,
         tir_casts_mirror_ray: true,
         name_lights: false,
+        eye_from_hither: true,
     };
     /// The SPD testing procedure's (README, "The SPD testing procedure").
     pub const SPD: Rules = Rules {
@@ -46,6 +50,7 @@ impl Rules {
         one_sided: true,
         tir_casts_mirror_ray: false,
         name_lights: true,
+        eye_from_hither: false,
     };
 }
 
@@ -294,7 +299,8 @@ pub fn render_colors<S: Shooter>(
     let pb = crate::bench::progress(cam.height as usize, progress);
     pb.set_message("rows");
     let (w, h) = (cam.width as usize, cam.height as usize);
-    let (f, r, u) = cam.basis();
+    let basis = cam.basis();
+    let t_min = eye_t_min(t.mesh, t.rules);
     let next = AtomicUsize::new(0);
     let mut image = vec![Vec3::ZERO; w * h];
     let rows: Vec<std::sync::Mutex<&mut [Vec3]>> =
@@ -312,7 +318,7 @@ pub fn render_colors<S: Shooter>(
                         }
                         let mut row = rows[y].lock().unwrap();
                         for (x, px) in row.iter_mut().enumerate() {
-                            let ray = eye_ray(t.mesh, cam, (f, r, u), x as u32, y as u32, t.rules);
+                            let ray = eye_ray(cam, basis, x as u32, y as u32, t_min);
                             *px = t.trace(&ray, 0, &mut ctx);
                         }
                         pb.inc(1);
@@ -332,24 +338,20 @@ pub fn render_colors<S: Shooter>(
     (image, stats, counts)
 }
 
-/// The eye ray through the centre of pixel `(x, y)`: from the hither
-/// plane on (coray's rules) or from the eye (the SPD's, whose procedure
-/// has no hither, and the LCTS casts').
-pub fn eye_ray(
-    mesh: &SceneMesh,
-    cam: &Camera,
-    basis: (Vec3, Vec3, Vec3),
-    x: u32,
-    y: u32,
-    rules: Rules,
-) -> Ray {
+/// Where `rules` start eye rays: the scene's hither distance or the eye.
+pub fn eye_t_min(mesh: &SceneMesh, rules: Rules) -> f32 {
+    if rules.eye_from_hither {
+        mesh.hither.max(0.0)
+    } else {
+        0.0
+    }
+}
+
+/// The eye ray through the centre of pixel `(x, y)`, from `t_min` on.
+pub fn eye_ray(cam: &Camera, basis: (Vec3, Vec3, Vec3), x: u32, y: u32, t_min: f32) -> Ray {
     let (f, r, u) = basis;
     let ray = cam.ray_in(f, r, u, x as f32 + 0.5, y as f32 + 0.5);
-    if rules == Rules::SPD {
-        ray
-    } else {
-        Ray::new(ray.origin, ray.dir, mesh.hither.max(0.0), f32::INFINITY)
-    }
+    Ray::new(ray.origin, ray.dir, t_min, f32::INFINITY)
 }
 
 /// 8-bit sRGB-ish bytes (gamma 2.2) of a linear colour.

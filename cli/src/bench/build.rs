@@ -40,7 +40,7 @@ pub struct BuildRow {
     pub cells: Vec<BuildCell>,
 }
 
-fn kd(scene: &Scene, preset: Preset, name: &str) -> Result<(f64, BuildCell), String> {
+fn kd(scene: &Scene, preset: Preset, name: &str) -> Result<BuildCell, String> {
     let params = preset.params();
     let req = coray::kd::requirements(scene.prim_count(), &params);
     let mut o = OwnedKd::with_room(&req);
@@ -49,81 +49,71 @@ fn kd(scene: &Scene, preset: Preset, name: &str) -> Result<(f64, BuildCell), Str
         .map_err(|e| format!("{name}: {e}"))?;
     let ms = t.elapsed().as_secs_f64() * 1e3;
     let n = scene.prim_count().max(1) as f64;
-    Ok((
+    let scratch = coray::kd::layout::KdScratchLayout::of(&req).map_or(0, |l| l.total_bytes);
+    Ok(BuildCell {
+        builder: name.into(),
         ms,
-        BuildCell {
-            builder: name.into(),
-            ms,
-            bytes_per_prim: o.arena_bytes() as f64 / n,
-            scratch_per_prim: coray::kd::layout::KdScratchLayout::of(&req)
-                .map_or(0, |l| l.total_bytes) as f64
-                / n,
-            truncated: o.info().truncated(),
-        },
-    ))
+        bytes_per_prim: o.arena_bytes() as f64 / n,
+        scratch_per_prim: scratch as f64 / n,
+        truncated: o.info().truncated(),
+    })
 }
 
-fn tdbs_sah(scene: &Scene) -> Result<(f64, BuildCell), String> {
+fn tdbs_sah(scene: &Scene) -> Result<BuildCell, String> {
     let how = coray::owned::BvhBuild::Static(coray::bvh::Builder::TdbsSah, 1);
     let mut o = OwnedBvh::with_room(scene.prim_count(), how);
     let t = Instant::now();
     o.build(scene).map_err(|e| format!("tdbs-sah: {e}"))?;
     let ms = t.elapsed().as_secs_f64() * 1e3;
     let n = scene.prim_count().max(1) as f64;
-    Ok((
+    Ok(BuildCell {
+        builder: "tdbs-sah".into(),
         ms,
-        BuildCell {
-            builder: "tdbs-sah".into(),
-            ms,
-            bytes_per_prim: o.bytes() as f64 / n,
-            scratch_per_prim: 0.0,
-            truncated: false,
-        },
-    ))
+        bytes_per_prim: o.bytes() as f64 / n,
+        scratch_per_prim: 0.0,
+        truncated: false,
+    })
 }
 
 #[cfg(feature = "embree")]
-fn embree(scene: &Scene, threads: usize) -> Result<(f64, BuildCell), String> {
+fn embree(scene: &Scene, threads: usize) -> Result<BuildCell, String> {
     let e = coray_embree::EmbreeScene::new(scene, Some(threads as u32));
     let (secs, kept, peak) = e.build_cost();
     let n = scene.prim_count().max(1) as f64;
-    Ok((
-        secs * 1e3,
-        BuildCell {
-            builder: format!("embree ({threads} thr)"),
-            ms: secs * 1e3,
-            bytes_per_prim: kept as f64 / n,
-            scratch_per_prim: peak.saturating_sub(kept) as f64 / n,
-            truncated: false,
-        },
-    ))
+    Ok(BuildCell {
+        builder: format!("embree ({threads} thr)"),
+        ms: secs * 1e3,
+        bytes_per_prim: kept as f64 / n,
+        scratch_per_prim: peak.saturating_sub(kept) as f64 / n,
+        truncated: false,
+    })
 }
 
 /// Builds every builder `repeat` times in turn on `s`; the best time of
 /// each counts. Embree at 1 thread and, when `threads` > 1, at `threads`.
 pub fn run(s: &crate::scene::SceneData, repeat: usize, threads: usize) -> Result<BuildRow, String> {
-    type Builder<'a> = Box<dyn Fn(&Scene) -> Result<(f64, BuildCell), String> + 'a>;
+    type Builder<'a> = Box<dyn Fn(&Scene) -> Result<BuildCell, String> + 'a>;
+    #[allow(unused_mut)] // nothing more is pushed without Embree
     let mut builders: Vec<Builder> = vec![
         Box::new(|sc| kd(sc, Preset::Auto, "kd-auto")),
         Box::new(|sc| kd(sc, Preset::Paper, "kd-paper")),
         Box::new(tdbs_sah),
     ];
-    if cfg!(feature = "embree") {
-        #[cfg(feature = "embree")]
-        {
-            builders.push(Box::new(|sc| embree(sc, 1)));
-            if threads > 1 {
-                builders.push(Box::new(move |sc| embree(sc, threads)));
-            }
+    #[cfg(feature = "embree")]
+    {
+        builders.push(Box::new(|sc| embree(sc, 1)));
+        if threads > 1 {
+            builders.push(Box::new(move |sc| embree(sc, threads)));
         }
     }
+    #[cfg(not(feature = "embree"))]
     let _ = threads;
     let scene = s.mesh.scene();
     let mut cells: Vec<Option<BuildCell>> = vec![None; builders.len()];
     for _ in 0..repeat.max(1) {
         for (b, cell) in builders.iter().zip(cells.iter_mut()) {
-            let (ms, c) = b(&scene)?;
-            if cell.as_ref().is_none_or(|best| ms < best.ms) {
+            let c = b(&scene)?;
+            if cell.as_ref().is_none_or(|best| c.ms < best.ms) {
                 *cell = Some(c);
             }
         }
