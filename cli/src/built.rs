@@ -14,6 +14,7 @@ use std::time::Instant;
 
 enum Inner<'s> {
     Kd(OwnedKd, Traversal),
+    KdC(coray_ffi::through_c::CKdTree<'s>, bool),
     Bvh(OwnedBvh),
     Proj(Box<ProjRig<'s>>),
     #[cfg(feature = "embree")]
@@ -83,6 +84,22 @@ impl<'s> Built<'s> {
                 b.truncated = o.info().truncated();
                 b.inner = Inner::Kd(o, traversal);
             }
+            Method::KdC { per_ray } => {
+                let p = match preset {
+                    Preset::Auto => coray_ffi::CORAY_KD_PRESET_AUTO,
+                    Preset::Paper => coray_ffi::CORAY_KD_PRESET_PAPER,
+                };
+                let t = Instant::now();
+                let tree = coray_ffi::through_c::CKdTree::new(
+                    &scene,
+                    p,
+                    coray_ffi::CORAY_TRAVERSAL_HIERARCHICAL,
+                )
+                .map_err(|s| format!("{method} build: {}", coray_ffi::status_description(s as i32).to_string_lossy()))?;
+                b.build_ms = ms(t);
+                b.bytes = Some(tree.arena_bytes());
+                b.inner = Inner::KdC(tree, per_ray);
+            }
             Method::Cast { .. } => {
                 return Err(format!(
                     "{method} casts images: use it with `coray bench`, or for the eye rays of `coray render --spd`"
@@ -127,6 +144,11 @@ impl<'s> Built<'s> {
             Inner::Kd(o, traversal) => v.visit(&AccelShooter {
                 accel: o.tree(self.scene).expect("just built"),
                 method: *traversal,
+                bounds: self.bounds,
+            }),
+            Inner::KdC(tree, per_ray) => v.visit(&crate::shoot::KdCShooter {
+                tree,
+                per_ray: *per_ray,
                 bounds: self.bounds,
             }),
             Inner::Bvh(o) => v.visit(&AccelShooter {

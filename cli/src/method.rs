@@ -98,6 +98,13 @@ pub enum Method {
         /// Hierarchical or ropes.
         traversal: Traversal,
     },
+    /// A kd-tree built, opened and traced through the C ABI with the
+    /// command's preset, hierarchically: what a C caller pays per call.
+    KdC {
+        /// One `coray_kdtree_intersect1` / `_occluded1` call per ray
+        /// (`kd-c1`), else one array call per chunk of rays (`kd-c`).
+        per_ray: bool,
+    },
     /// A kd-tree casting the camera's image by an LCTS scheme.
     Cast {
         /// The scheme (hierarchical and rope casts are its references).
@@ -196,8 +203,8 @@ impl Method {
     pub fn help() -> String {
         let names: Vec<String> = Method::all().iter().map(|m| m.to_string()).collect();
         format!(
-            "{}, kd-paper, kd-paper-rope, kd-paper-packet, slcts1d:N, slcts2d:NxM, and \
-             proj-BUILDER-CRITERIA-SCHEME (BUILDER {}, CRITERIA 2d|dummy, SCHEME 2d|3d|comb)",
+            "{}, kd-paper, kd-paper-rope, kd-paper-packet, kd-c, kd-c1, slcts1d:N, slcts2d:NxM, \
+             and proj-BUILDER-CRITERIA-SCHEME (BUILDER {}, CRITERIA 2d|dummy, SCHEME 2d|3d|comb)",
             names.join(", "),
             PROJ_BUILDERS.join("|")
         )
@@ -221,6 +228,8 @@ impl Method {
             "kd-packet" => return kd(None, Traversal::Packets),
             "kd-paper-packet" => return kd(Some(Preset::Paper), Traversal::Packets),
             "kd-auto-packet" => return kd(Some(Preset::Auto), Traversal::Packets),
+            "kd-c" => return Some(Method::KdC { per_ray: false }),
+            "kd-c1" => return Some(Method::KdC { per_ray: true }),
             "slcts1d" => return cast(Scheme::Slcts1d { n: 5 }),
             "slcts2d" => return cast(Scheme::Slcts2d { n: 5, m: 5 }),
             "hlcts1d" => return cast(Scheme::Hlcts1d),
@@ -310,6 +319,8 @@ impl fmt::Display for Method {
                 };
                 write!(f, "kd{p}{t}")
             }
+            Method::KdC { per_ray: false } => f.write_str("kd-c"),
+            Method::KdC { per_ray: true } => f.write_str("kd-c1"),
             Method::Cast { scheme } => match scheme {
                 Scheme::Slcts1d { n: 5 } => f.write_str("slcts1d"),
                 Scheme::Slcts1d { n } => write!(f, "slcts1d:{n}"),

@@ -184,6 +184,86 @@ impl Shooter for KdPacketShooter<'_> {
     }
 }
 
+/// A kd-tree traced through the C ABI: one call per ray, or one array
+/// call per chunk of rays (the harness's chunks). Statistics stay 0: the
+/// calls get NULL for them, as a renderer's would.
+pub struct KdCShooter<'a, 's> {
+    /// The opened tree.
+    pub tree: &'a coray_ffi::through_c::CKdTree<'s>,
+    /// `coray_kdtree_intersect1` per ray, else array calls.
+    pub per_ray: bool,
+    /// Its scene's box.
+    pub bounds: Aabb,
+}
+
+impl Shooter for KdCShooter<'_, '_> {
+    /// The traversal stack and the any-hit answers as bytes.
+    type Ctx = (coray_ffi::through_c::CStack, Vec<u8>);
+
+    fn ctx(&self) -> Self::Ctx {
+        Default::default()
+    }
+
+    fn intersect(&self, ray: &Ray, ctx: &mut Self::Ctx, _: &mut TraceStats) -> Hit {
+        self.tree.intersect1(ray, &mut ctx.0).expect("valid call")
+    }
+
+    fn occluded(
+        &self,
+        ray: &Ray,
+        _: Option<usize>,
+        ctx: &mut Self::Ctx,
+        _: &mut TraceStats,
+    ) -> bool {
+        self.tree.occluded1(ray, &mut ctx.0).expect("valid call")
+    }
+
+    fn intersect_all(
+        &self,
+        rays: &[Ray],
+        out: &mut [Hit],
+        ctx: &mut Self::Ctx,
+        st: &mut TraceStats,
+    ) {
+        if self.per_ray {
+            for (r, h) in rays.iter().zip(out.iter_mut()) {
+                *h = self.intersect(r, ctx, st);
+            }
+        } else {
+            self.tree
+                .intersect(rays, out, &mut ctx.0)
+                .expect("valid call");
+        }
+    }
+
+    fn occluded_all(
+        &self,
+        rays: &[Ray],
+        _: Option<&[usize]>,
+        out: &mut [bool],
+        ctx: &mut Self::Ctx,
+        st: &mut TraceStats,
+    ) {
+        if self.per_ray {
+            for (r, o) in rays.iter().zip(out.iter_mut()) {
+                *o = self.occluded(r, None, ctx, st);
+            }
+        } else {
+            ctx.1.resize(rays.len(), 0);
+            self.tree
+                .occluded(rays, &mut ctx.1, &mut ctx.0)
+                .expect("valid call");
+            for (o, b) in out.iter_mut().zip(&ctx.1) {
+                *o = *b != 0;
+            }
+        }
+    }
+
+    fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+}
+
 /// Embree, one ray at a time or in packets of 8.
 #[cfg(feature = "embree")]
 pub struct EmbreeShooter<'a> {

@@ -723,3 +723,46 @@ fn build_table_has_every_builder() {
     assert!(cells[0]["scratch_per_prim"].as_f64().unwrap() > 0.0);
     assert_eq!(cells[2]["scratch_per_prim"], 0.0);
 }
+
+/// The speed table traces every set with every method, the C-ABI rows
+/// (`kd-c` array calls, `kd-c1` one call per ray) among them, and every
+/// coray method answers exactly as the hierarchical kd-tree.
+#[test]
+fn speed_table_has_the_c_abi_rows_and_no_mismatch() {
+    let d = tmp("speed");
+    let (code, out, err) = coray(
+        &[
+            "bench",
+            "--table",
+            "speed",
+            "spd:tree:3",
+            "--res",
+            "32",
+            "--repeat",
+            "1",
+            "--json",
+        ],
+        &d,
+    );
+    assert_eq!(code, 0, "{err}");
+    let v = json(&out);
+    let rows = v.as_array().unwrap();
+    let sets: Vec<&str> = rows.iter().map(|r| r["set"].as_str().unwrap()).collect();
+    assert_eq!(sets, ["primary", "shadow", "incoherent", "diffuse"]);
+    for r in rows {
+        let cells = r["cells"].as_array().unwrap();
+        for m in ["kd", "kd-c", "kd-c1"] {
+            let c = cells.iter().find(|c| c["method"] == m).expect(m);
+            assert!(c["mrays"].as_f64().unwrap() > 0.0, "{c}");
+        }
+        for c in cells {
+            if !c["method"].as_str().unwrap().starts_with("embree") {
+                assert_eq!(
+                    (&c["mismatches"], &c["ties"]),
+                    (&0.into(), &0.into()),
+                    "{c}"
+                );
+            }
+        }
+    }
+}

@@ -5,7 +5,7 @@
 
 use crate::abi::*;
 use crate::carve::{self, check_arena, Out, OutValue, Regions, Versioned};
-use crate::handle::{self, Handle, KIND_BVH};
+use crate::handle::{self, Handle, Sealed, KIND_BVH};
 use crate::{guard, CorayBvh, CorayStatus};
 use coray::bvh::layout::{
     code, BvhArenaHeader, BvhArenaLayout, BvhScratchLayout, BVH_HEADER_BYTES, BVH_MAGIC,
@@ -468,20 +468,15 @@ pub unsafe extern "C" fn coray_bvh_open(
         let (h, l) = unsafe { header(base, arena_bytes)? };
         regions.add(base, arena_bytes, false).check()?;
         check_scene(h.scene_counts, &scene)?;
-        let mut hd = Handle {
-            kind: KIND_BVH,
-            arena: base as usize,
-            arena_bytes: l.total_bytes,
-            ..Handle::default()
-        };
-        hd.set_scene(&scene);
-        hd.parts[0] = (0, 1);
-        hd.parts[1] = (l.nodes_offset, l.nodes);
-        hd.parts[2] = (l.refs_offset, l.refs);
+        let mut hd = Handle::new(KIND_BVH, base as usize, l.total_bytes, &scene);
+        hd.set_part::<BvhArenaHeader>(0, 0, 1)?;
+        hd.set_part::<BvhNode>(1, l.nodes_offset, l.nodes)?;
+        hd.set_part::<u32>(2, l.refs_offset, l.refs)?;
+        let words = hd.words();
         // SAFETY: the handle describes the arena just checked, readable.
-        unsafe { view_of(&hd, scene)? };
+        unsafe { view_of(Sealed::new(&words, KIND_BVH)?, scene)? };
         // SAFETY: out checked non-null, aligned, disjoint from the arena.
-        unsafe { out.write(CorayBvh { opaque: hd.words() }) };
+        unsafe { out.write(CorayBvh { opaque: words }) };
         Ok(())
     })
 }
@@ -490,14 +485,14 @@ pub unsafe extern "C" fn coray_bvh_open(
 ///
 /// Safety: the handle's arena is readable and unchanged during `'a`.
 unsafe fn view_of<'a>(
-    h: &Handle,
+    h: Sealed,
     scene: Scene<'a>,
 ) -> Result<(BvhArenaHeader, Bvh<'a>), CorayStatus> {
-    // SAFETY: the handle's parts lie within its arena (Handle::part
-    // checks), readable by the caller's contract.
+    // SAFETY: the handle's parts lie within its arena (Handle::set_part
+    // at open), readable by the caller's contract.
     unsafe {
-        let header = h.part::<BvhArenaHeader>(0)?[0];
-        let b = Bvh::from_parts(scene, h.part(1)?, h.part(2)?, header.info)?;
+        let header = h.part::<BvhArenaHeader>(0)[0];
+        let b = Bvh::from_parts(scene, h.part::<BvhNode>(1), h.part::<u32>(2), header.info)?;
         Ok((header, b))
     }
 }
@@ -513,9 +508,9 @@ unsafe fn open<'a>(
     // SAFETY: forwarded contract.
     unsafe {
         let h = handle::read(t.cast(), KIND_BVH, regions)?;
-        regions.add(h.arena as *const u8, h.arena_bytes, false);
+        regions.add(h.arena() as *const u8, h.arena_bytes(), false);
         let scene = h.scene(regions);
-        view_of(&h, scene)
+        view_of(h, scene)
     }
 }
 

@@ -77,41 +77,71 @@ const _: () = {
 
 /// The byte ranges one call reads and writes: a written range may overlap
 /// no other range of the call (reads may share memory with each other).
+/// Ranges are kept as `[start, end)`; read ones fill the list from the
+/// front, written ones from the back, so [`Regions::check`] compares only
+/// the pairs that matter (a one-ray call has three written of about ten).
 pub(crate) struct Regions {
-    list: [(usize, usize, bool); 16],
-    n: usize,
+    list: [(usize, usize); REGIONS],
+    read: usize,
+    written: usize,
+    /// More ranges were added than the list holds: `check` refuses.
+    overflow: bool,
 }
+
+/// Ranges one call may note (the busiest entry points note 11).
+const REGIONS: usize = 16;
 
 impl Regions {
     pub(crate) fn new() -> Regions {
         Regions {
-            list: [(0, 0, false); 16],
-            n: 0,
+            list: [(0, 0); REGIONS],
+            read: 0,
+            written: 0,
+            overflow: false,
         }
     }
 
     /// Adds `bytes` at `p` (nothing for an empty range).
+    #[inline(always)]
     pub(crate) fn add<T>(&mut self, p: *const T, bytes: usize, written: bool) -> &mut Regions {
-        if bytes > 0 && self.n < self.list.len() {
-            self.list[self.n] = (p as usize, bytes, written);
-            self.n += 1;
+        if bytes == 0 {
+            return self;
+        }
+        if self.read + self.written == REGIONS {
+            self.overflow = true;
+            return self;
+        }
+        let range = (p as usize, (p as usize).saturating_add(bytes));
+        if written {
+            self.written += 1;
+            self.list[REGIONS - self.written] = range;
+        } else {
+            self.list[self.read] = range;
+            self.read += 1;
         }
         self
     }
 
-    /// `InvalidParameter` when a written range overlaps another. Only
-    /// pairs with a written range are compared (a one-ray call has three
-    /// of about ten): every trace call runs this.
+    /// `InvalidParameter` when a written range overlaps another. Every
+    /// trace call runs this: branch-free over the pairs.
+    #[inline(always)]
     pub(crate) fn check(&self) -> Result<(), CorayStatus> {
-        let r = &self.list[..self.n];
-        for (i, a) in r.iter().enumerate().filter(|(_, a)| a.2) {
-            // Every other range; a written one before `i` was already paired.
-            for (j, b) in r.iter().enumerate() {
-                let overlap = a.0 < b.0.saturating_add(b.1) && b.0 < a.0.saturating_add(a.1);
-                if j != i && !(b.2 && j < i) && overlap {
-                    return Err(CorayStatus::InvalidParameter);
-                }
-            }
+        if self.overflow {
+            return Err(CorayStatus::InternalError);
+        }
+        let overlaps = |(start, end): (usize, usize), others: &[(usize, usize)]| {
+            others
+                .iter()
+                .fold(false, |o, &(s, e)| o | ((start < e) & (s < end)))
+        };
+        let mut overlap = false;
+        for i in REGIONS - self.written..REGIONS {
+            // Every read range, and the written ones after this one.
+            overlap |= overlaps(self.list[i], &self.list[..self.read]);
+            overlap |= overlaps(self.list[i], &self.list[i + 1..]);
+        }
+        if overlap {
+            return Err(CorayStatus::InvalidParameter);
         }
         Ok(())
     }
@@ -173,6 +203,7 @@ pub(crate) unsafe fn zero(base: *mut u8, bytes: usize) {
 
 /// Checks an array of `count` `T`s at `p`: not null unless empty, aligned,
 /// at most `isize::MAX` bytes; returns its byte length.
+#[inline]
 pub(crate) fn check_array<T>(p: *const T, count: usize) -> Result<usize, CorayStatus> {
     if count == 0 {
         return Ok(0);
@@ -195,6 +226,7 @@ pub(crate) fn check_array<T>(p: *const T, count: usize) -> Result<usize, CoraySt
 /// # Safety
 /// When `count > 0`, `p` points to `count` readable elements that stay
 /// unchanged during `'a`.
+#[inline]
 pub(crate) unsafe fn input<'a, T>(p: *const T, count: usize) -> Result<&'a [T], CorayStatus> {
     check_array(p, count)?;
     if count == 0 {
@@ -210,6 +242,7 @@ pub(crate) unsafe fn input<'a, T>(p: *const T, count: usize) -> Result<&'a [T], 
 /// # Safety
 /// When `count > 0`, `p` points to `count` writable elements that nothing
 /// else touches during `'a`.
+#[inline]
 pub(crate) unsafe fn output<'a, T>(p: *mut T, count: usize) -> Result<&'a mut [T], CorayStatus> {
     check_array(p, count)?;
     if count == 0 {
@@ -386,6 +419,7 @@ pub(crate) unsafe fn scene<'a>(
 ///
 /// # Safety
 /// `p` is NULL or valid for writes of `bytes` bytes, lent exclusively.
+#[inline(always)]
 pub(crate) unsafe fn stack<'a, T: Plain>(
     p: *mut core::ffi::c_void,
     bytes: usize,
@@ -427,5 +461,28 @@ mod tests {
         assert!(r.check().is_ok(), "touching is not overlapping");
         r.add(p, 0, true);
         assert!(r.check().is_ok(), "an empty range overlaps nothing");
+        r.add(p.wrapping_add(31), 2, true);
+        assert!(r.check().is_err(), "two written ranges overlap");
+        let mut r = Regions::new();
+        r.add(p.wrapping_add(40), 8, true).add(p, 64, false);
+        assert!(
+            r.check().is_err(),
+            "a read added after the write is compared too"
+        );
+        let mut r = Regions::new();
+        r.add(usize::MAX as *const u8, 8, true).add(p, 8, false);
+        assert!(r.check().is_ok(), "a range at the top of memory saturates");
+    }
+
+    #[test]
+    fn more_regions_than_the_list_holds_are_refused() {
+        let buf = [0u8; 64];
+        let mut r = Regions::new();
+        for i in 0..REGIONS {
+            r.add(buf.as_ptr().wrapping_add(i), 1, false);
+        }
+        assert!(r.check().is_ok());
+        r.add(buf.as_ptr(), 1, true);
+        assert_eq!(r.check(), Err(CorayStatus::InternalError));
     }
 }

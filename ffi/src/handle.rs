@@ -38,22 +38,22 @@ pub struct CorayProj {
 }
 
 /// What every handle holds: the arena, the scene's arrays, and the byte
-/// offsets and element counts of the arena's parts (at most 8), all as
-/// words, and the seal over them.
+/// offsets and element counts of the arena's parts (at most 8). The open
+/// calls fill one and store its [`Handle::words`]; every later call reads
+/// those words in place through [`Sealed`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub(crate) struct Handle {
     /// Which object: a tag per kind, part of the seal.
-    pub kind: u64,
+    kind: u64,
     /// The arena's address and bytes.
-    pub arena: usize,
-    pub arena_bytes: usize,
+    arena: usize,
+    arena_bytes: usize,
     /// The scene's arrays: address and count of vertices, triangles,
     /// spheres, cones.
-    pub scene: [usize; 8],
-    /// Byte offsets and counts of the arena's parts.
-    pub parts: [(usize, usize); 8],
-    /// Object-specific words (a kd-tree's info, a plane, a builder).
-    pub extra: [u32; 16],
+    scene: [usize; 8],
+    /// Byte offsets and counts of the arena's parts, each checked by
+    /// [`Handle::set_part`] (the only way to set one).
+    parts: [(usize, usize); 8],
 }
 
 /// Handle kinds (any values; the seal binds them).
@@ -62,21 +62,36 @@ pub(crate) const KIND_BVH: u64 = 0x4256;
 pub(crate) const KIND_PROJ: u64 = 0x504a;
 
 const WORDS: usize = 32;
+/// Word 0 is the seal; words 1 to `SEALED_END - 1` are what it covers:
+/// kind (1), arena (2, 3), scene (4..12), parts (12..20), and word 20,
+/// always 0 (five groups of four). The rest are 0 and unused.
+const SEALED_END: usize = 21;
+
+/// The seal over the covered words: four independent lanes (so a trace
+/// call's check is not one long dependency chain) of xor, odd multiply and
+/// rotate per word, joined by one avalanche. Each step is a bijection of
+/// its lane and the lanes are joined by xor of distinct rotations, so any
+/// single changed word changes the seal: it catches a handle the caller
+/// damaged or never opened. Every trace call checks it (about 3
+/// instructions a word).
+#[inline(always)]
+fn seal_of(w: &[u64; WORDS]) -> u64 {
+    const K: u64 = 0x9E37_79B9_7F4A_7C15;
+    let mut l = [
+        0xC0A4_5EA1_0000_0001u64,
+        0x6A09_E667_F3BC_C908,
+        0xBB67_AE85_84CA_A73B,
+        0x3C6E_F372_FE94_F82B,
+    ];
+    for group in w[1..SEALED_END].chunks_exact(4) {
+        for (lane, &x) in l.iter_mut().zip(group) {
+            *lane = (*lane ^ x).wrapping_mul(K).rotate_left(29);
+        }
+    }
+    coray::rng::mix64(l[0] ^ l[1].rotate_left(16) ^ l[2].rotate_left(32) ^ l[3].rotate_left(48))
+}
 
 impl Handle {
-    /// The seal over words 1 to 27 (kind to extra): one multiply-xorshift
-    /// per word and a final avalanche. It catches a handle the caller
-    /// damaged or never opened (any changed word changes it), at about 4
-    /// instructions a word: every trace call checks it.
-    fn seal_of(w: &[u64; WORDS]) -> u64 {
-        let mut h = 0xC0A4_5EA1_0000_0001u64;
-        for &x in &w[1..28] {
-            h = (h ^ x).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-            h ^= h >> 29;
-        }
-        coray::rng::mix64(h)
-    }
-
     /// The handle as the words a caller keeps.
     pub(crate) fn words(&self) -> [u64; WORDS] {
         let mut w = [0u64; WORDS];
@@ -89,47 +104,90 @@ impl Handle {
         for (i, (o, n)) in self.parts.iter().enumerate() {
             w[12 + i] = (*o as u64) << 32 | *n as u64;
         }
-        for (i, pair) in self.extra.chunks(2).enumerate() {
-            w[20 + i] = (pair[0] as u64) << 32 | pair[1] as u64;
-        }
-        w[0] = Self::seal_of(&w);
+        w[0] = seal_of(&w);
         w
     }
 
-    /// The handle in `w`, if its seal holds and it is of `kind`.
-    pub(crate) fn from_words(w: &[u64; WORDS], kind: u64) -> Result<Handle, CorayStatus> {
-        if w[1] != kind || Self::seal_of(w) != w[0] {
-            return Err(CorayStatus::InvalidParameter);
+    /// Records part `i` of the arena: `count` `T`s at byte `offset`, which
+    /// must lie within the arena's bytes at a 16-aligned offset (the open
+    /// calls' check; trace calls then read the part unchecked).
+    pub(crate) fn set_part<T>(
+        &mut self,
+        i: usize,
+        offset: usize,
+        count: usize,
+    ) -> Result<(), CorayStatus> {
+        let end = count
+            .checked_mul(core::mem::size_of::<T>())
+            .and_then(|b| b.checked_add(offset));
+        if end.is_none_or(|e| e > self.arena_bytes)
+            || !offset.is_multiple_of(16)
+            || offset > u32::MAX as usize
+            || count > u32::MAX as usize
+        {
+            return Err(CorayStatus::CorruptArena);
         }
-        let mut h = Handle {
-            kind: w[1],
-            arena: w[2] as usize,
-            arena_bytes: w[3] as usize,
-            ..Handle::default()
-        };
-        for i in 0..8 {
-            h.scene[i] = w[4 + i] as usize;
-            h.parts[i] = ((w[12 + i] >> 32) as usize, w[12 + i] as u32 as usize);
-        }
-        for i in 0..8 {
-            h.extra[2 * i] = (w[20 + i] >> 32) as u32;
-            h.extra[2 * i + 1] = w[20 + i] as u32;
-        }
-        Ok(h)
+        self.parts[i] = (offset, count);
+        Ok(())
     }
 
-    /// Records the scene's arrays.
-    pub(crate) fn set_scene(&mut self, s: &Scene) {
-        self.scene = [
-            s.vertices.as_ptr() as usize,
-            s.vertices.len(),
-            s.triangles.as_ptr() as usize,
-            s.triangles.len(),
-            s.spheres.as_ptr() as usize,
-            s.spheres.len(),
-            s.cones.as_ptr() as usize,
-            s.cones.len(),
-        ];
+    /// A handle of `kind` on the arena at `arena` (its layout `arena_bytes`
+    /// long) and `scene`'s arrays, with no parts yet.
+    pub(crate) fn new(kind: u64, arena: usize, arena_bytes: usize, s: &Scene) -> Handle {
+        Handle {
+            kind,
+            arena,
+            arena_bytes,
+            scene: [
+                s.vertices.as_ptr() as usize,
+                s.vertices.len(),
+                s.triangles.as_ptr() as usize,
+                s.triangles.len(),
+                s.spheres.as_ptr() as usize,
+                s.spheres.len(),
+                s.cones.as_ptr() as usize,
+                s.cones.len(),
+            ],
+            parts: [(0, 0); 8],
+        }
+    }
+}
+
+/// A handle's words whose seal holds, read where they lie (in the caller's
+/// handle, or in the words an open call is about to store): nothing is
+/// decoded or copied, each accessor reads the word it needs.
+#[derive(Clone, Copy)]
+pub(crate) struct Sealed<'h> {
+    w: &'h [u64; WORDS],
+}
+
+impl<'h> Sealed<'h> {
+    /// The words `w`, if their seal holds and they are of `kind`.
+    #[inline(always)]
+    pub(crate) fn new(w: &'h [u64; WORDS], kind: u64) -> Result<Sealed<'h>, CorayStatus> {
+        if w[1] != kind || seal_of(w) != w[0] {
+            return Err(CorayStatus::InvalidParameter);
+        }
+        Ok(Sealed { w })
+    }
+
+    /// The arena's address.
+    #[inline]
+    pub(crate) fn arena(&self) -> usize {
+        self.w[2] as usize
+    }
+
+    /// The arena's bytes (its layout's size).
+    #[inline]
+    pub(crate) fn arena_bytes(&self) -> usize {
+        self.w[3] as usize
+    }
+
+    /// Byte offset and count of the arena's part `i`.
+    #[inline]
+    fn part_at(&self, i: usize) -> (usize, usize) {
+        let x = self.w[12 + i];
+        ((x >> 32) as usize, x as u32 as usize)
     }
 
     /// The scene the handle was opened with, its arrays noted in `regions`.
@@ -137,17 +195,18 @@ impl Handle {
     /// # Safety
     /// The arrays the open call was given are still readable and unchanged
     /// (the caller's contract for every call on a handle).
+    #[inline(always)]
     pub(crate) unsafe fn scene<'a>(&self, regions: &mut Regions) -> Scene<'a> {
-        let s = &self.scene;
+        let s = |i: usize| (self.w[4 + i] as usize, self.w[5 + i] as usize);
         // SAFETY (four calls): address and count were checked by
         // carve::input when the handle was opened (non-null unless empty,
         // aligned, size in range) and sealed since; readable by the contract.
         let scene = unsafe {
             Scene {
-                vertices: slice(s[0], s[1]),
-                triangles: slice(s[2], s[3]),
-                spheres: slice(s[4], s[5]),
-                cones: slice(s[6], s[7]),
+                vertices: slice(s(0)),
+                triangles: slice(s(2)),
+                spheres: slice(s(4)),
+                cones: slice(s(6)),
             }
         };
         regions
@@ -162,26 +221,20 @@ impl Handle {
         scene
     }
 
-    /// Part `i` of the arena as a slice of `T`, within the arena's bytes.
+    /// Part `i` of the arena as a slice of `T`. Not checked again: the
+    /// open call checked it ([`Handle::set_part`]) before sealing.
     ///
     /// # Safety
     /// The arena the open call was given is still readable, and nobody
-    /// writes the part during `'a`.
-    pub(crate) unsafe fn part<'a, T: carve::Plain>(
-        &self,
-        i: usize,
-    ) -> Result<&'a [T], CorayStatus> {
-        let (offset, count) = self.parts[i];
-        let end = count
-            .checked_mul(core::mem::size_of::<T>())
-            .and_then(|b| b.checked_add(offset));
-        if end.is_none_or(|e| e > self.arena_bytes) || !offset.is_multiple_of(16) {
-            return Err(CorayStatus::InvalidParameter);
-        }
+    /// writes the part during `'a`; `T` is the type the open call checked
+    /// part `i` for.
+    #[inline(always)]
+    pub(crate) unsafe fn part<'a, T: carve::Plain>(&self, i: usize) -> &'a [T] {
+        let (offset, count) = self.part_at(i);
         // SAFETY: the arena passed check_arena at open and holds
-        // `arena_bytes` readable bytes; the part lies within them (checked
-        // above), at a 16-aligned offset.
-        Ok(unsafe { carve::arena_ref(self.arena as *const u8, offset, count) })
+        // `arena_bytes` readable bytes; the part lies within them at a
+        // 16-aligned offset (Handle::set_part at open, sealed since).
+        unsafe { carve::arena_ref(self.arena() as *const u8, offset, count) }
     }
 }
 
@@ -189,7 +242,8 @@ impl Handle {
 ///
 /// # Safety
 /// As `core::slice::from_raw_parts` for `n > 0`.
-unsafe fn slice<'a, T>(a: usize, n: usize) -> &'a [T] {
+#[inline]
+unsafe fn slice<'a, T>((a, n): (usize, usize)) -> &'a [T] {
     if n == 0 {
         return &[];
     }
@@ -197,19 +251,23 @@ unsafe fn slice<'a, T>(a: usize, n: usize) -> &'a [T] {
     unsafe { core::slice::from_raw_parts(a as *const T, n) }
 }
 
-/// The handle behind a caller's pointer, noted in `regions` as read.
+/// The handle behind a caller's pointer, read in place, noted in
+/// `regions` as read.
 ///
 /// # Safety
-/// `p` is NULL or points to a readable handle.
-pub(crate) unsafe fn read(
+/// `p` is NULL or points to a readable handle that stays unchanged during
+/// `'h`.
+#[inline(always)]
+pub(crate) unsafe fn read<'h>(
     p: *const [u64; WORDS],
     kind: u64,
     regions: &mut Regions,
-) -> Result<Handle, CorayStatus> {
+) -> Result<Sealed<'h>, CorayStatus> {
     carve::check_array(p, 1)?;
     regions.add(p, core::mem::size_of::<[u64; WORDS]>(), false);
-    // SAFETY: non-null and aligned (checked); readable by the contract.
-    Handle::from_words(unsafe { &*p }, kind)
+    // SAFETY: non-null and aligned (checked); readable and unchanged for
+    // 'h by the contract.
+    Sealed::new(unsafe { &*p }, kind)
 }
 
 #[cfg(test)]
@@ -225,17 +283,44 @@ mod tests {
             ..Handle::default()
         };
         h.parts[0] = (128, 7);
-        h.extra[3] = 9;
+        h.scene[3] = 9;
         let w = h.words();
-        assert_eq!(Handle::from_words(&w, KIND_KD), Ok(h));
-        assert!(Handle::from_words(&w, KIND_BVH).is_err());
-        assert!(Handle::from_words(&[0; WORDS], KIND_KD).is_err());
-        for i in 0..WORDS {
-            let mut bad = w;
-            bad[i] ^= 1 << (i % 61);
-            if i < 28 {
-                assert!(Handle::from_words(&bad, KIND_KD).is_err(), "word {i}");
+        let s = Sealed::new(&w, KIND_KD).expect("sealed");
+        assert_eq!(
+            (s.arena(), s.arena_bytes(), s.part_at(0)),
+            (0x1000, 4096, (128, 7))
+        );
+        assert_eq!(s.w[7], 9);
+        assert!(Sealed::new(&w, KIND_BVH).is_err());
+        assert!(Sealed::new(&[0; WORDS], KIND_KD).is_err());
+        for i in 0..SEALED_END {
+            for bit in [0, 17, 32, 63] {
+                let mut bad = w;
+                bad[i] ^= 1 << bit;
+                assert!(Sealed::new(&bad, KIND_KD).is_err(), "word {i} bit {bit}");
             }
         }
+    }
+
+    #[test]
+    fn a_part_outside_the_arena_is_refused_at_open() {
+        let mut h = Handle::new(KIND_KD, 0x1000, 4096, &Scene::default());
+        assert_eq!(h.set_part::<u32>(1, 4096 - 16, 4), Ok(()), "exact fit");
+        assert_eq!(
+            h.set_part::<u32>(1, 4096 - 16, 5),
+            Err(CorayStatus::CorruptArena)
+        );
+        assert_eq!(
+            h.set_part::<u32>(1, 8, 1),
+            Err(CorayStatus::CorruptArena),
+            "misaligned"
+        );
+        let huge = usize::MAX / 2;
+        assert_eq!(
+            h.set_part::<u32>(1, 16, huge),
+            Err(CorayStatus::CorruptArena),
+            "overflow"
+        );
+        assert_eq!(h.parts[1], (4096 - 16, 4), "a refused part is not recorded");
     }
 }

@@ -4,10 +4,12 @@
 
 use crate::abi::*;
 use crate::carve::{self, check_arena, Out, OutValue, Regions, Versioned};
-use crate::handle::{self, Handle, KIND_KD};
+use crate::handle::{self, Handle, Sealed, KIND_KD};
 use crate::{guard, CorayKdTree, CorayStatus};
 use coray::kd::layout::{KdArenaHeader, KdArenaLayout, KdScratchLayout, KD_HEADER_BYTES};
-use coray::kd::{self, KdStackItem, KdTree, Traversal, KD_STACK_LEN, PACKET_LANES};
+use coray::kd::{
+    self, KdLeaf, KdNode, KdRopes, KdStackItem, KdTree, Traversal, KD_STACK_LEN, PACKET_LANES,
+};
 use coray::limits::MAX_PRIMS;
 use coray::{Accel, TraceStats};
 use core::ffi::c_void;
@@ -339,23 +341,19 @@ pub unsafe extern "C" fn coray_kdtree_open(
         let h = unsafe { carve::arena_ref::<KdArenaHeader>(base, 0, 1)[0] };
         let l = h.layout(arena_bytes)?;
         let c = &l.counts;
-        let mut hd = Handle {
-            kind: KIND_KD,
-            arena: base as usize,
-            arena_bytes: l.total_bytes,
-            ..Handle::default()
-        };
-        hd.set_scene(&scene);
-        hd.parts[0] = (0, 1);
-        hd.parts[1] = (l.nodes_offset, c.nodes);
-        hd.parts[2] = (l.leaves_offset, c.leaves);
-        hd.parts[3] = (l.ropes_offset, c.ropes);
-        hd.parts[4] = (l.refs_offset, c.refs);
-        // The tree must assemble: counts, magic, version, scene.
+        let mut hd = Handle::new(KIND_KD, base as usize, l.total_bytes, &scene);
+        hd.set_part::<KdArenaHeader>(0, 0, 1)?;
+        hd.set_part::<KdNode>(1, l.nodes_offset, c.nodes)?;
+        hd.set_part::<KdLeaf>(2, l.leaves_offset, c.leaves)?;
+        hd.set_part::<KdRopes>(3, l.ropes_offset, c.ropes)?;
+        hd.set_part::<u32>(4, l.refs_offset, c.refs)?;
+        // The tree must assemble from the words stored: counts, magic,
+        // version, scene.
+        let words = hd.words();
         // SAFETY: the handle describes the arena just checked, readable.
-        unsafe { tree_of(&hd, scene)? };
+        unsafe { tree_of(Sealed::new(&words, KIND_KD)?, scene)? };
         // SAFETY: out checked non-null, aligned, disjoint from the arena.
-        unsafe { out.write(CorayKdTree { opaque: hd.words() }) };
+        unsafe { out.write(CorayKdTree { opaque: words }) };
         Ok(())
     })
 }
@@ -363,18 +361,20 @@ pub unsafe extern "C" fn coray_kdtree_open(
 /// The tree a handle describes, over `scene`.
 ///
 /// Safety: the handle's arena is readable and unchanged during `'a`.
-unsafe fn tree_of<'a>(h: &Handle, scene: coray::Scene<'a>) -> Result<KdTree<'a>, CorayStatus> {
-    // SAFETY: the handle's parts lie within its arena (Handle::part checks),
-    // readable by the caller's contract.
+#[inline(always)]
+unsafe fn tree_of<'a>(h: Sealed, scene: coray::Scene<'a>) -> Result<KdTree<'a>, CorayStatus> {
+    // SAFETY: the handle's parts lie within its arena, each checked for
+    // its type when the handle was opened (Handle::set_part); readable by
+    // the caller's contract.
     unsafe {
-        let header = h.part::<KdArenaHeader>(0)?[0];
+        let header = &h.part::<KdArenaHeader>(0)[0];
         Ok(KdTree::from_parts(
             scene,
             header.info,
-            h.part(1)?,
-            h.part(2)?,
-            h.part(3)?,
-            h.part(4)?,
+            h.part::<KdNode>(1),
+            h.part::<KdLeaf>(2),
+            h.part::<KdRopes>(3),
+            h.part::<u32>(4),
         )?)
     }
 }
@@ -383,6 +383,7 @@ unsafe fn tree_of<'a>(h: &Handle, scene: coray::Scene<'a>) -> Result<KdTree<'a>,
 ///
 /// Safety: `t` is NULL or a handle `coray_kdtree_open` filled, whose arena
 /// and scene are still in place and unchanged during `'a`.
+#[inline(always)]
 pub(crate) unsafe fn open<'a>(
     t: *const CorayKdTree,
     regions: &mut Regions,
@@ -391,7 +392,7 @@ pub(crate) unsafe fn open<'a>(
     // call opens one: no copy of it leaves this frame).
     unsafe {
         let h = handle::read(t.cast(), KIND_KD, regions)?;
-        view(&h, regions)
+        view(h, regions)
     }
 }
 
@@ -399,10 +400,11 @@ pub(crate) unsafe fn open<'a>(
 /// noted in `regions`.
 ///
 /// Safety: as [`open`], for the handle `h` was read from.
-unsafe fn view<'a>(h: &Handle, regions: &mut Regions) -> Result<KdTree<'a>, CorayStatus> {
+#[inline(always)]
+unsafe fn view<'a>(h: Sealed, regions: &mut Regions) -> Result<KdTree<'a>, CorayStatus> {
     // SAFETY: forwarded contract.
     unsafe {
-        regions.add(h.arena as *const u8, h.arena_bytes, false);
+        regions.add(h.arena() as *const u8, h.arena_bytes(), false);
         let scene = h.scene(regions);
         tree_of(h, scene)
     }
@@ -414,11 +416,11 @@ unsafe fn view<'a>(h: &Handle, regions: &mut Regions) -> Result<KdTree<'a>, Cora
 unsafe fn open_handle<'a>(
     t: *const CorayKdTree,
     regions: &mut Regions,
-) -> Result<(Handle, KdTree<'a>), CorayStatus> {
+) -> Result<(Sealed<'a>, KdTree<'a>), CorayStatus> {
     // SAFETY: forwarded contract.
     unsafe {
         let h = handle::read(t.cast(), KIND_KD, regions)?;
-        let t = view(&h, regions)?;
+        let t = view(h, regions)?;
         Ok((h, t))
     }
 }
@@ -451,7 +453,7 @@ pub unsafe extern "C" fn coray_kdtree_info(
             depth: i.depth,
             valid_prim_count: i.valid_prim_count,
             truncated: i.truncated() as u32,
-            arena_bytes_used: h.arena_bytes,
+            arena_bytes_used: h.arena_bytes(),
             stack_bytes: CORAY_KDTREE_STACK_BYTES,
             bounds_min: i.bounds_min,
             bounds_max: i.bounds_max,
@@ -504,6 +506,7 @@ pub unsafe extern "C" fn coray_kdtree_validate(
 ///
 /// Safety: as `coray_kdtree_intersect`, with `out` holding `count` `O`s.
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 unsafe fn batch<O>(
     tree: *const CorayKdTree,
     method: CorayTraversal,
@@ -541,8 +544,18 @@ unsafe fn batch<O>(
         // The caller's rays traced in place, in groups of 8: what a packet
         // takes (the other traversals trace them ray by ray).
         let rays = crate::abi::core_rays(rays);
-        for (rs, os) in rays.chunks(PACKET_LANES).zip(out.chunks_mut(PACKET_LANES)) {
-            answer(&t, rs, os, method, stk, &mut st)?;
+        let mut first = 0;
+        while first < count {
+            let end = count.min(first + PACKET_LANES);
+            answer(
+                &t,
+                &rays[first..end],
+                &mut out[first..end],
+                method,
+                stk,
+                &mut st,
+            )?;
+            first = end;
         }
         if st.faults > 0 {
             return Err(CorayStatus::CorruptArena);
@@ -550,6 +563,47 @@ unsafe fn batch<O>(
         stats.write(CorayTraceStats::of(&st));
         Ok(())
     })
+}
+
+/// Closest hits of up to [`PACKET_LANES`] rays, written in place (the
+/// caller's array is the core's).
+fn intersect_chunk(
+    t: &KdTree,
+    rays: &[coray::Ray],
+    out: &mut [CorayHit],
+    m: Traversal,
+    s: &mut [KdStackItem],
+    st: &mut TraceStats,
+) -> Result<(), coray::Error> {
+    let hits = crate::abi::core_hits(out);
+    if cfg!(feature = "packets") && m == Traversal::Packets {
+        crate::simd::intersect_packets(t, rays, hits, s, st);
+    } else {
+        Accel::intersect_many(t, rays, hits, m, s, st)?;
+    }
+    Ok(())
+}
+
+/// Any-hit answers of up to [`PACKET_LANES`] rays, as bytes.
+fn occluded_chunk(
+    t: &KdTree,
+    rays: &[coray::Ray],
+    out: &mut [u8],
+    m: Traversal,
+    s: &mut [KdStackItem],
+    st: &mut TraceStats,
+) -> Result<(), coray::Error> {
+    let mut occ = [false; PACKET_LANES];
+    let occ = &mut occ[..rays.len()];
+    if cfg!(feature = "packets") && m == Traversal::Packets {
+        crate::simd::occluded_packets(t, rays, occ, s, st);
+    } else {
+        Accel::occluded_many(t, rays, occ, m, s, st)?;
+    }
+    for (o, b) in out.iter_mut().zip(occ.iter()) {
+        *o = *b as u8;
+    }
+    Ok(())
 }
 
 /// Closest hits of `count` rays: `hits[i]` for `rays[i]`, by `traversal`.
@@ -582,16 +636,7 @@ pub unsafe extern "C" fn coray_kdtree_intersect(
             stack,
             stack_bytes,
             stats,
-            |t, rays, out, m, s, st| {
-                // Hits written in place: the caller's array is the core's.
-                let hits = crate::abi::core_hits(out);
-                if cfg!(feature = "packets") && m == Traversal::Packets {
-                    crate::simd::intersect_packets(t, rays, hits, s, st);
-                } else {
-                    Accel::intersect_many(t, rays, hits, m, s, st)?;
-                }
-                Ok(())
-            },
+            intersect_chunk,
         )
     }
 }
@@ -609,11 +654,21 @@ pub unsafe extern "C" fn coray_kdtree_intersect1(
     stack_bytes: usize,
     stats: *mut CorayTraceStats,
 ) -> CorayStatus {
-    if ray.is_null() || hit.is_null() {
-        return CorayStatus::NullPointer;
+    // SAFETY: forwarded caller contract. `batch` is inlined here with a
+    // count of 1: no loop, no second call.
+    unsafe {
+        batch(
+            tree,
+            traversal,
+            ray,
+            hit,
+            1,
+            stack,
+            stack_bytes,
+            stats,
+            intersect_chunk,
+        )
     }
-    // SAFETY: forwarded caller contract.
-    unsafe { coray_kdtree_intersect(tree, traversal, ray, hit, 1, stack, stack_bytes, stats) }
 }
 
 /// Any-hit queries (shadow rays) of `count` rays: `occluded[i]` is 1 when
@@ -643,19 +698,7 @@ pub unsafe extern "C" fn coray_kdtree_occluded(
             stack,
             stack_bytes,
             stats,
-            |t, rays, out, m, s, st| {
-                let mut occ = [false; PACKET_LANES];
-                let occ = &mut occ[..rays.len()];
-                if cfg!(feature = "packets") && m == Traversal::Packets {
-                    crate::simd::occluded_packets(t, rays, occ, s, st);
-                } else {
-                    Accel::occluded_many(t, rays, occ, m, s, st)?;
-                }
-                for (o, b) in out.iter_mut().zip(occ.iter()) {
-                    *o = *b as u8;
-                }
-                Ok(())
-            },
+            occluded_chunk,
         )
     }
 }
@@ -673,9 +716,18 @@ pub unsafe extern "C" fn coray_kdtree_occluded1(
     stack_bytes: usize,
     stats: *mut CorayTraceStats,
 ) -> CorayStatus {
-    if ray.is_null() || occluded.is_null() {
-        return CorayStatus::NullPointer;
+    // SAFETY: forwarded caller contract; `batch` inlined with a count of 1.
+    unsafe {
+        batch(
+            tree,
+            traversal,
+            ray,
+            occluded,
+            1,
+            stack,
+            stack_bytes,
+            stats,
+            occluded_chunk,
+        )
     }
-    // SAFETY: forwarded caller contract.
-    unsafe { coray_kdtree_occluded(tree, traversal, ray, occluded, 1, stack, stack_bytes, stats) }
 }

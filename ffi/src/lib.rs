@@ -30,6 +30,8 @@ mod proj;
 #[cfg(feature = "std")]
 pub mod saved;
 pub mod simd;
+#[cfg(feature = "std")]
+pub mod through_c;
 
 pub use abi::*;
 pub use bvh::*;

@@ -7,7 +7,7 @@ use crate::abi::*;
 use crate::bvh::{check_scene, scene_counts, CorayBvhBuilder, CorayBvhParams, Kind};
 use crate::carve::{self, check_arena, Out, OutValue, Regions, Versioned};
 use crate::cast::{camera, CorayCamera};
-use crate::handle::{self, Handle, KIND_PROJ};
+use crate::handle::{self, Handle, Sealed, KIND_PROJ};
 use crate::{guard, CorayProj, CorayStatus};
 use coray::bvh::layout::code;
 use coray::bvh::{Bvh, BvhNode, BvhScratch, BvhStackItem};
@@ -556,22 +556,17 @@ pub unsafe extern "C" fn coray_proj_open(
         if code::to_static(h.builder).is_none() && !code::is_rtree(h.builder) {
             return Err(CorayStatus::CorruptArena);
         }
-        let mut hd = Handle {
-            kind: KIND_PROJ,
-            arena: base as usize,
-            arena_bytes: l.total_bytes,
-            ..Handle::default()
-        };
-        hd.set_scene(&scene);
-        hd.parts[0] = (0, 1);
-        hd.parts[1] = (l.nodes_offset, l.nodes);
-        hd.parts[2] = (l.refs_offset, l.refs);
-        hd.parts[3] = (l.rects_offset, l.nodes);
-        hd.parts[4] = (l.prim_rects_offset, l.prim_rects);
+        let mut hd = Handle::new(KIND_PROJ, base as usize, l.total_bytes, &scene);
+        hd.set_part::<ProjArenaHeader>(0, 0, 1)?;
+        hd.set_part::<BvhNode>(1, l.nodes_offset, l.nodes)?;
+        hd.set_part::<u32>(2, l.refs_offset, l.refs)?;
+        hd.set_part::<Rect>(3, l.rects_offset, l.nodes)?;
+        hd.set_part::<Rect>(4, l.prim_rects_offset, l.prim_rects)?;
+        let words = hd.words();
         // SAFETY: the handle describes the arena just checked, readable.
-        unsafe { view_of(&hd, scene)? };
+        unsafe { view_of(Sealed::new(&words, KIND_PROJ)?, scene)? };
         // SAFETY: out checked non-null, aligned, disjoint from the arena.
-        unsafe { out.write(CorayProj { opaque: hd.words() }) };
+        unsafe { out.write(CorayProj { opaque: words }) };
         Ok(())
     })
 }
@@ -580,18 +575,18 @@ pub unsafe extern "C" fn coray_proj_open(
 ///
 /// Safety: the handle's arena is readable and unchanged during `'a`.
 unsafe fn view_of<'a>(
-    h: &Handle,
+    h: Sealed,
     scene: Scene<'a>,
 ) -> Result<(ProjArenaHeader, ProjHierarchy<'a>), CorayStatus> {
-    // SAFETY: the handle's parts lie within its arena (Handle::part
-    // checks), readable by the caller's contract.
+    // SAFETY: the handle's parts lie within its arena (Handle::set_part
+    // at open), readable by the caller's contract.
     unsafe {
-        let header = h.part::<ProjArenaHeader>(0)?[0];
+        let header = h.part::<ProjArenaHeader>(0)[0];
         if header.plane_kind > 1 || !header.plane.iter().all(|x| x.is_finite()) {
             return Err(CorayStatus::CorruptArena);
         }
-        let b = Bvh::from_parts(scene, h.part(1)?, h.part(2)?, header.info)?;
-        let p = ProjHierarchy::from_parts(b, h.part(3)?, h.part(4)?, header.plane())?;
+        let b = Bvh::from_parts(scene, h.part::<BvhNode>(1), h.part::<u32>(2), header.info)?;
+        let p = ProjHierarchy::from_parts(b, h.part::<Rect>(3), h.part::<Rect>(4), header.plane())?;
         Ok((header, p))
     }
 }
@@ -607,9 +602,9 @@ unsafe fn open<'a>(
     // SAFETY: forwarded contract.
     unsafe {
         let h = handle::read(t.cast(), KIND_PROJ, regions)?;
-        regions.add(h.arena as *const u8, h.arena_bytes, false);
+        regions.add(h.arena() as *const u8, h.arena_bytes(), false);
         let scene = h.scene(regions);
-        view_of(&h, scene)
+        view_of(h, scene)
     }
 }
 

@@ -39,21 +39,17 @@ fn aligned(bytes: usize) -> Vec<u128> {
     std::vec![0u128; bytes.div_ceil(16).max(1)]
 }
 
-/// The file holding `scene` and a kd-tree built on it with `preset`.
-pub fn kdtree_file(scene: &Scene, preset: CorayKdPreset) -> Result<Vec<u8>, CorayStatus> {
+/// A kd-tree built on `scene` with `preset` by `coray_kdtree_build`: the
+/// arena (16-byte aligned words) and its bytes.
+pub(crate) fn build_arena(
+    scene: &Scene,
+    preset: CorayKdPreset,
+) -> Result<(Vec<u128>, usize), CorayStatus> {
     let params = coray_kdtree_params_default(preset);
     if params.struct_size == 0 {
         return Err(CorayStatus::InvalidParameter);
     }
-    let mut c = coray_scene_default();
-    c.vertices = scene.vertices.as_ptr().cast();
-    c.vertex_count = scene.vertices.len();
-    c.indices = scene.triangles.as_ptr().cast();
-    c.triangle_count = scene.triangles.len();
-    c.spheres = scene.spheres.as_ptr().cast();
-    c.sphere_count = scene.spheres.len();
-    c.cones = scene.cones.as_ptr().cast();
-    c.cone_count = scene.cones.len();
+    let c = c_scene(scene);
     let mut req = coray_requirements_default();
     // SAFETY: params and req are live locals with struct_size set.
     let s = unsafe { coray_kdtree_requirements(scene.prim_count(), &params, &mut req) };
@@ -79,10 +75,30 @@ pub fn kdtree_file(scene: &Scene, preset: CorayKdPreset) -> Result<Vec<u8>, Cora
     if s != CorayStatus::Ok {
         return Err(s);
     }
+    Ok((arena, req.arena_bytes))
+}
+
+/// `scene` as the C ABI's struct (pointers to its arrays).
+pub(crate) fn c_scene(scene: &Scene) -> CorayScene {
+    let mut c = coray_scene_default();
+    c.vertices = scene.vertices.as_ptr().cast();
+    c.vertex_count = scene.vertices.len();
+    c.indices = scene.triangles.as_ptr().cast();
+    c.triangle_count = scene.triangles.len();
+    c.spheres = scene.spheres.as_ptr().cast();
+    c.sphere_count = scene.spheres.len();
+    c.cones = scene.cones.as_ptr().cast();
+    c.cone_count = scene.cones.len();
+    c
+}
+
+/// The file holding `scene` and a kd-tree built on it with `preset`.
+pub fn kdtree_file(scene: &Scene, preset: CorayKdPreset) -> Result<Vec<u8>, CorayStatus> {
+    let (arena, arena_bytes) = build_arena(scene, preset)?;
     let arena: Vec<u8> = arena
         .iter()
         .flat_map(|w| w.to_ne_bytes())
-        .take(req.arena_bytes)
+        .take(arena_bytes)
         .collect();
     let f32s = |v: &mut dyn Iterator<Item = f32>| v.flat_map(f32::to_ne_bytes).collect::<Vec<u8>>();
     let parts: [(Vec<u8>, usize); 5] = [
@@ -145,7 +161,7 @@ pub fn kdtree_file(scene: &Scene, preset: CorayKdPreset) -> Result<Vec<u8>, Cora
         offsets[2],
         offsets[3],
         offsets[4],
-        req.arena_bytes as u64,
+        arena_bytes as u64,
     ];
     for (k, w) in words.iter().enumerate() {
         out[16 + 8 * k..24 + 8 * k].copy_from_slice(&w.to_ne_bytes());

@@ -230,6 +230,7 @@ impl<'a> KdTree<'a> {
     /// [`KdTree::validate`] on parts from untrusted storage: until it
     /// accepts them, traversal never panics or hangs on them, but may stop
     /// early with [`crate::TraceStats::faults`] counted.
+    #[inline]
     pub fn from_parts(
         scene: Scene<'a>,
         info: KdInfo,
@@ -266,6 +267,7 @@ impl<'a> KdTree<'a> {
     }
 
     /// Errors unless `scene` has the primitive counts this tree was built on.
+    #[inline]
     pub fn check_scene(&self, scene: &Scene) -> Result<(), Error> {
         let i = &self.info;
         if scene.triangles.len() != i.triangle_count as usize

@@ -267,7 +267,8 @@ pub fn run_rays(
         uniform,
     });
     let n = w.primary.len().max(1) as f64;
-    let embree = matches!(built.method, Method::Embree(_));
+    // Embree counts nothing; the C-ABI rows pass NULL statistics.
+    let counted = !matches!(built.method, Method::Embree(_) | Method::KdC { .. });
     let (mismatches, ties) = judge(built, w, tree, &hits, &occluded).counts();
     let mut all = pst;
     all.add(&sst);
@@ -281,8 +282,8 @@ pub fn run_rays(
             shadow_s,
             primary_rays: w.primary.len(),
             shadow_rays: w.shadow.rays.len(),
-            tspr: (!embree).then(|| pst.traversal_steps as f64 / n),
-            isect_per_ray: (!embree).then(|| pst.prim_tests as f64 / n),
+            tspr: counted.then(|| pst.traversal_steps as f64 / n),
+            isect_per_ray: counted.then(|| pst.prim_tests as f64 / n),
             mismatches,
             ties,
             truncated: built.truncated,

@@ -1,0 +1,228 @@
+//! A kd-tree built, opened and traced through the C entry points, for Rust
+//! code that must pay exactly what a C caller pays per call: `coray bench`
+//! times `kd-c` (one `coray_kdtree_intersect` / `_occluded` call per array
+//! of rays) against `kd-c1` (one `coray_kdtree_intersect1` / `_occluded1`
+//! call per ray) with it. Safe to use: it owns the arena and the handle and
+//! hands the entry points only pointers it made from live borrows.
+
+use crate::saved::{build_arena, c_scene};
+use crate::*;
+use coray::{Hit, Ray, Scene};
+use core::marker::PhantomData;
+use std::vec::Vec;
+
+/// A kd-tree in a C arena, opened: its handle points into the arena and
+/// into the scene's arrays, which `'s` keeps alive and unchanged.
+pub struct CKdTree<'s> {
+    /// The arena (its heap buffer never moves while the tree lives).
+    _arena: Vec<u128>,
+    /// Its bytes, as `coray_kdtree_requirements` asked.
+    arena_bytes: usize,
+    handle: CorayKdTree,
+    traversal: CorayTraversal,
+    _scene: PhantomData<&'s Scene<'s>>,
+}
+
+/// One thread's traversal stack: `CORAY_KDTREE_STACK_BYTES`, 16-byte aligned.
+pub struct CStack(Vec<u128>);
+
+impl Default for CStack {
+    fn default() -> CStack {
+        CStack(std::vec![0u128; CORAY_KDTREE_STACK_BYTES / 16])
+    }
+}
+
+impl<'s> CKdTree<'s> {
+    /// Builds a tree on `scene` with `preset` (`CORAY_KD_PRESET_*`) and
+    /// opens it, to be traced by `traversal` (`CORAY_TRAVERSAL_*`).
+    pub fn new(
+        scene: &Scene<'s>,
+        preset: CorayKdPreset,
+        traversal: CorayTraversal,
+    ) -> Result<CKdTree<'s>, CorayStatus> {
+        let (arena, bytes) = build_arena(scene, preset)?;
+        let c = c_scene(scene);
+        let mut handle = CorayKdTree { opaque: [0; 32] };
+        // SAFETY: the arena was just built (16-byte aligned, `bytes` long)
+        // and is kept with the handle; c points to `scene`'s arrays, which
+        // outlive 's; handle is a live local.
+        let s = unsafe { coray_kdtree_open(arena.as_ptr().cast(), bytes, &c, &mut handle) };
+        if s != CorayStatus::Ok {
+            return Err(s);
+        }
+        Ok(CKdTree {
+            _arena: arena,
+            arena_bytes: bytes,
+            handle,
+            traversal,
+            _scene: PhantomData,
+        })
+    }
+
+    /// The arena's bytes.
+    pub fn arena_bytes(&self) -> usize {
+        self.arena_bytes
+    }
+
+    /// Closest hits of `rays` by one `coray_kdtree_intersect` call.
+    pub fn intersect(
+        &self,
+        rays: &[Ray],
+        hits: &mut [Hit],
+        stack: &mut CStack,
+    ) -> Result<(), CorayStatus> {
+        let n = rays.len().min(hits.len());
+        // SAFETY: Ray and CorayRay, Hit and CorayHit share their layout
+        // (asserted in abi.rs); both arrays hold at least n elements and
+        // are disjoint borrows; the handle is this tree's, its arena and
+        // scene alive ('s); the stack is 16-byte aligned and as long as
+        // passed.
+        let s = unsafe {
+            coray_kdtree_intersect(
+                &self.handle,
+                self.traversal,
+                rays.as_ptr().cast(),
+                hits.as_mut_ptr().cast(),
+                n,
+                stack.0.as_mut_ptr().cast(),
+                CORAY_KDTREE_STACK_BYTES,
+                core::ptr::null_mut(),
+            )
+        };
+        status(s)
+    }
+
+    /// The closest hit of `ray` by one `coray_kdtree_intersect1` call.
+    pub fn intersect1(&self, ray: &Ray, stack: &mut CStack) -> Result<Hit, CorayStatus> {
+        let mut hit = Hit::MISS;
+        // SAFETY: as in `intersect`, for one ray and one hit (a local).
+        let s = unsafe {
+            coray_kdtree_intersect1(
+                &self.handle,
+                self.traversal,
+                (ray as *const Ray).cast(),
+                (&mut hit as *mut Hit).cast(),
+                stack.0.as_mut_ptr().cast(),
+                CORAY_KDTREE_STACK_BYTES,
+                core::ptr::null_mut(),
+            )
+        };
+        status(s).map(|()| hit)
+    }
+
+    /// Any-hit answers for `rays` (1 blocked, 0 free) by one
+    /// `coray_kdtree_occluded` call.
+    pub fn occluded(
+        &self,
+        rays: &[Ray],
+        out: &mut [u8],
+        stack: &mut CStack,
+    ) -> Result<(), CorayStatus> {
+        let n = rays.len().min(out.len());
+        // SAFETY: as in `intersect`, with `out` holding at least n bytes.
+        let s = unsafe {
+            coray_kdtree_occluded(
+                &self.handle,
+                self.traversal,
+                rays.as_ptr().cast(),
+                out.as_mut_ptr(),
+                n,
+                stack.0.as_mut_ptr().cast(),
+                CORAY_KDTREE_STACK_BYTES,
+                core::ptr::null_mut(),
+            )
+        };
+        status(s)
+    }
+
+    /// Whether something blocks `ray`, by one `coray_kdtree_occluded1` call.
+    pub fn occluded1(&self, ray: &Ray, stack: &mut CStack) -> Result<bool, CorayStatus> {
+        let mut out = 0u8;
+        // SAFETY: as in `intersect`, for one ray and one byte (a local).
+        let s = unsafe {
+            coray_kdtree_occluded1(
+                &self.handle,
+                self.traversal,
+                (ray as *const Ray).cast(),
+                &mut out,
+                stack.0.as_mut_ptr().cast(),
+                CORAY_KDTREE_STACK_BYTES,
+                core::ptr::null_mut(),
+            )
+        };
+        status(s).map(|()| out != 0)
+    }
+}
+
+fn status(s: CorayStatus) -> Result<(), CorayStatus> {
+    match s {
+        CorayStatus::Ok => Ok(()),
+        e => Err(e),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use coray::kd::{KdParams, Traversal};
+    use coray::owned::OwnedKd;
+    use coray::{Sphere, Vec3};
+
+    /// Every call of the wrapper answers as the core does on the same
+    /// tree, for closest and any hits, arrays and single rays.
+    #[test]
+    fn the_c_calls_answer_as_the_core() {
+        let vertices = [
+            [0.0, 0.0, 5.0],
+            [4.0, 0.0, 5.0],
+            [0.0, 4.0, 5.0],
+            [4.0, 4.0, 6.0],
+        ];
+        let triangles = [[0, 1, 2], [1, 3, 2]];
+        let spheres = [Sphere {
+            center: [1.0, 1.0, 2.0],
+            radius: 0.5,
+        }];
+        let scene = Scene {
+            vertices: &vertices,
+            triangles: &triangles,
+            spheres: &spheres,
+            cones: &[],
+        };
+        let rays: Vec<Ray> = (0..40)
+            .map(|i| {
+                let (x, y) = ((i % 8) as f32 * 0.6 - 0.5, (i / 8) as f32 * 0.9 - 0.5);
+                Ray::new(Vec3::new(x, y, 0.0), Vec3::new(0.0, 0.0, 1.0), 0.0, 1e30)
+            })
+            .collect();
+        let owned = OwnedKd::new(&scene, &KdParams::auto()).expect("build");
+        let core = owned.tree(scene).expect("tree");
+        let mut st = coray::TraceStats::default();
+        let mut core_stack = coray::owned::stack(coray::kd::KD_STACK_LEN);
+        let want: Vec<Hit> = rays
+            .iter()
+            .map(|r| core.intersect(r, Traversal::Hierarchical, &mut core_stack, &mut st))
+            .collect();
+        assert!(want.iter().any(|h| h.is_hit()) && want.iter().any(|h| !h.is_hit()));
+        for traversal in [
+            CORAY_TRAVERSAL_HIERARCHICAL,
+            CORAY_TRAVERSAL_ROPES,
+            CORAY_TRAVERSAL_PACKETS,
+        ] {
+            let t = CKdTree::new(&scene, CORAY_KD_PRESET_AUTO, traversal).expect("open");
+            let mut stack = CStack::default();
+            let mut hits = std::vec![Hit::MISS; rays.len()];
+            t.intersect(&rays, &mut hits, &mut stack)
+                .expect("array call");
+            let mut occ = std::vec![0u8; rays.len()];
+            t.occluded(&rays, &mut occ, &mut stack).expect("array call");
+            for (i, r) in rays.iter().enumerate() {
+                let one = t.intersect1(r, &mut stack).expect("one-ray call");
+                assert_eq!((hits[i].prim_id, hits[i].t), (want[i].prim_id, want[i].t));
+                assert_eq!((one.prim_id, one.t), (want[i].prim_id, want[i].t));
+                assert_eq!(occ[i] != 0, want[i].is_hit());
+                assert_eq!(t.occluded1(r, &mut stack), Ok(want[i].is_hit()));
+            }
+        }
+    }
+}
