@@ -114,8 +114,24 @@ fn push_events(events: &mut [KdEvent], at: &mut usize, prim: usize, b: &Aabb, ax
 }
 
 fn area64(b: &Aabb) -> f64 {
-    let e = (b.max - b.min).as_dvec3();
-    2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
+    area_of_extent((b.max - b.min).as_dvec3().to_array())
+}
+
+/// Surface area of a box of extent `e`, in f64 (in this one order of
+/// operations: the sweep's candidates must round as the node's own area).
+#[inline]
+fn area_of_extent(e: [f64; 3]) -> f64 {
+    2.0 * (e[0] * e[1] + e[1] * e[2] + e[2] * e[0])
+}
+
+/// Area of the node's box with its extent on `axis` replaced by `along`
+/// (the extent of a candidate child): as `area64` of that child's box,
+/// bit for bit, without building it.
+#[inline]
+fn area_along(extent: [f64; 3], axis: usize, along: f32) -> f64 {
+    let mut e = extent;
+    e[axis] = along as f64;
+    area_of_extent(e)
 }
 
 fn with_max(b: &Aabb, axis: usize, v: f32) -> Aabb {
@@ -367,6 +383,7 @@ impl<'s, 'a> Builder<'s, 'a> {
             return None;
         }
         let inv_area = 1.0 / area;
+        let extent = (v.max - v.min).as_dvec3().to_array();
         let (kt, ki, bonus) = (
             self.params.cost_traversal,
             self.params.cost_intersection,
@@ -406,8 +423,8 @@ impl<'s, 'a> Builder<'s, 'a> {
                 }
                 nr -= planars + ends;
                 let mut consider = |pos: f32, nl: usize, nr: usize, planars: usize| {
-                    let pl = (area64(&with_max(v, axis, pos)) * inv_area) as f32;
-                    let pr = (area64(&with_min(v, axis, pos)) * inv_area) as f32;
+                    let pl = (area_along(extent, axis, pos - v.min[axis]) * inv_area) as f32;
+                    let pr = (area_along(extent, axis, v.max[axis] - pos) * inv_area) as f32;
                     let cl = cost(pl, pr, nl + planars, nr);
                     let cr = cost(pl, pr, nl, nr + planars);
                     let (c, planar_left) = if cl <= cr { (cl, true) } else { (cr, false) };
@@ -575,11 +592,14 @@ impl<'s, 'a> Builder<'s, 'a> {
             let rnew = top + 6 * straddling + axis * s2;
             self.events[lnew..lnew + tl[axis]].sort_unstable_by(KdEvent::order);
             self.events[rnew..rnew + tr[axis]].sort_unstable_by(KdEvent::order);
-            let l0 = lat;
-            self.merge(s, e, LEFT, lnew, lnew + tl[axis], &mut lat);
+            let (l0, r0) = (lat, rat);
+            self.merge(
+                (s, e),
+                (lnew, lnew + tl[axis]),
+                (rnew, rnew + tr[axis]),
+                (&mut lat, &mut rat),
+            );
             lcounts[axis] = lat - l0;
-            let r0 = rat;
-            self.merge(s, e, RIGHT, rnew, rnew + tr[axis], &mut rat);
             rcounts[axis] = rat - r0;
         }
         // Right child first at the node's base (it waits), left on top.
@@ -614,30 +634,41 @@ impl<'s, 'a> Builder<'s, 'a> {
         Some((left, right))
     }
 
-    /// Merges the old events in `[s, e)` whose primitive is on `side` with
-    /// the sorted new events in `[ns, ne)`, writing at `*at`.
-    fn merge(&mut self, s: usize, e: usize, side: u8, ns: usize, ne: usize, at: &mut usize) {
-        let (mut i, mut j) = (s, ns);
-        loop {
-            while i < e && self.flags[self.events[i].prim()] != side {
-                i += 1;
-            }
-            let take_old = match (i < e, j < ne) {
-                (false, false) => return,
-                (true, false) => true,
-                (false, true) => false,
-                (true, true) => {
-                    KdEvent::order(&self.events[i], &self.events[j]) != Ordering::Greater
-                }
+    /// Splits the old events in `[s, e)` by their primitive's side and
+    /// merges each side with its sorted new events (`left_new`,
+    /// `right_new`), writing at `*at.0` and `*at.1`, in one pass over the
+    /// old events (a straddling primitive's old events are dropped: its
+    /// clipped ones are among the new).
+    fn merge(
+        &mut self,
+        (s, e): (usize, usize),
+        left_new: (usize, usize),
+        right_new: (usize, usize),
+        at: (&mut usize, &mut usize),
+    ) {
+        let (mut jl, mut jr) = (left_new.0, right_new.0);
+        let (lat, rat) = at;
+        for i in s..e {
+            let ev = self.events[i];
+            let (j, end, out) = match self.flags[ev.prim()] {
+                LEFT => (&mut jl, left_new.1, &mut *lat),
+                RIGHT => (&mut jr, right_new.1, &mut *rat),
+                _ => continue,
             };
-            if take_old {
-                self.events[*at] = self.events[i];
-                i += 1;
-            } else {
-                self.events[*at] = self.events[j];
-                j += 1;
+            // New events that sort before this old one go first (an old
+            // event goes before a new one it ties with).
+            while *j < end && KdEvent::order(&ev, &self.events[*j]) == Ordering::Greater {
+                self.events[*out] = self.events[*j];
+                *j += 1;
+                *out += 1;
             }
-            *at += 1;
+            self.events[*out] = ev;
+            *out += 1;
+        }
+        for (j, end, out) in [(jl, left_new.1, lat), (jr, right_new.1, rat)] {
+            let n = end - j;
+            self.events.copy_within(j..end, *out);
+            *out += n;
         }
     }
 }
