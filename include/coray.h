@@ -369,8 +369,10 @@ typedef struct CorayKdTreeInfo {
   uint32_t valid_prim_count;
   // 1 when room ran out and the build stopped splitting early.
   uint32_t truncated;
-  // Bytes of the arena the tree's layout covers (its capacities): what
-  // a copy of the arena must hold. The build wrote all of them.
+  // Bytes of the arena the tree's layout covers, from its start: what
+  // a copy of the arena must hold. `coray_kdtree_build` packs the tree
+  // into exactly what it uses, so after a build this is all the caller
+  // needs to keep (shrink the arena to it, or copy it).
   size_t arena_bytes_used;
   // Bytes of traversal stack every trace takes (`CORAY_KDTREE_STACK_BYTES`).
   size_t stack_bytes;
@@ -841,9 +843,14 @@ enum CorayStatus coray_kdtree_requirements(size_t prim_count,
 // the build stops splitting where room runs out (`truncated` in the info).
 // On `CORAY_STATUS_ARENA_TOO_SMALL`, `*needed_bytes` (if not NULL)
 // receives the minimum size of the arena or scratch that was too small.
-// The part of the arena the tree's layout covers is written entirely (no
-// byte of the caller's is left in it: two builds of one scene with one
-// set of parameters give the same bytes); bytes past it are not touched.
+// The build lays out as much room as `arena_bytes` allows (up to
+// `arena_bytes` of `coray_kdtree_requirements`) and writes all of it:
+// the finished tree is packed at the arena's start, in the
+// `arena_bytes_used` bytes `coray_kdtree_info` reports, and the rest of
+// the room is zeroed (no byte of the caller's is left in it: two builds
+// of one scene with one set of parameters give the same bytes). Bytes
+// past the room are not touched. Keep only the first `arena_bytes_used`
+// bytes (shrink the arena, or copy them) and open them there.
 //
 // The tree stores primitive indices: trace it with the same scene,
 // unchanged. The arena holds no pointer, so it may be copied, saved and

@@ -83,8 +83,10 @@ pub struct CorayKdTreeInfo {
     pub valid_prim_count: u32,
     /// 1 when room ran out and the build stopped splitting early.
     pub truncated: u32,
-    /// Bytes of the arena the tree's layout covers (its capacities): what
-    /// a copy of the arena must hold. The build wrote all of them.
+    /// Bytes of the arena the tree's layout covers, from its start: what
+    /// a copy of the arena must hold. `coray_kdtree_build` packs the tree
+    /// into exactly what it uses, so after a build this is all the caller
+    /// needs to keep (shrink the arena to it, or copy it).
     pub arena_bytes_used: usize,
     /// Bytes of traversal stack every trace takes (`CORAY_KDTREE_STACK_BYTES`).
     pub stack_bytes: usize,
@@ -230,9 +232,14 @@ pub unsafe extern "C" fn coray_kdtree_requirements(
 /// the build stops splitting where room runs out (`truncated` in the info).
 /// On `CORAY_STATUS_ARENA_TOO_SMALL`, `*needed_bytes` (if not NULL)
 /// receives the minimum size of the arena or scratch that was too small.
-/// The part of the arena the tree's layout covers is written entirely (no
-/// byte of the caller's is left in it: two builds of one scene with one
-/// set of parameters give the same bytes); bytes past it are not touched.
+/// The build lays out as much room as `arena_bytes` allows (up to
+/// `arena_bytes` of `coray_kdtree_requirements`) and writes all of it:
+/// the finished tree is packed at the arena's start, in the
+/// `arena_bytes_used` bytes `coray_kdtree_info` reports, and the rest of
+/// the room is zeroed (no byte of the caller's is left in it: two builds
+/// of one scene with one set of parameters give the same bytes). Bytes
+/// past the room are not touched. Keep only the first `arena_bytes_used`
+/// bytes (shrink the arena, or copy them) and open them there.
 ///
 /// The tree stores primitive indices: trace it with the same scene,
 /// unchanged. The arena holds no pointer, so it may be copied, saved and
@@ -285,10 +292,9 @@ pub unsafe extern "C" fn coray_kdtree_build(
         // arena_bytes and scratch_bytes (fit() checked) and their parts do
         // not overlap each other (layout formulas) nor across arenas or
         // with the scene (Regions); the caller lends the arenas exclusively.
-        let (header, storage, scratch) = unsafe {
+        let (storage, scratch) = unsafe {
             carve::zero(base, layout.total_bytes);
             (
-                carve::arena_mut::<KdArenaHeader>(base, 0, 1),
                 kd::KdStorage {
                     nodes: carve::arena_mut(base, layout.nodes_offset, c.nodes),
                     leaves: carve::arena_mut(base, layout.leaves_offset, c.leaves),
@@ -301,8 +307,19 @@ pub unsafe extern "C" fn coray_kdtree_build(
                 },
             )
         };
-        let tree = kd::build(&scene, &p, storage, scratch)?;
-        header[0] = KdArenaHeader::new(*tree.info(), &layout);
+        let info = *kd::build(&scene, &p, storage, scratch)?.info();
+        // The tree packed at the arena's start: the caller keeps only
+        // arena_bytes_used of it.
+        // SAFETY: the build's views of the arena are gone (only `info`, a
+        // copy, is left); the layout's bytes are still lent exclusively.
+        let bytes = unsafe { carve::arena_mut::<u8>(base, 0, layout.total_bytes) };
+        let tight = layout
+            .pack(&info, bytes)
+            .ok_or(CorayStatus::InternalError)?;
+        // SAFETY: as above; the header's bytes lie below the first part.
+        unsafe {
+            carve::arena_mut::<KdArenaHeader>(base, 0, 1)[0] = KdArenaHeader::new(info, &tight)
+        };
         Ok(())
     })
 }

@@ -40,7 +40,8 @@ fn aligned(bytes: usize) -> Vec<u128> {
 }
 
 /// A kd-tree built on `scene` with `preset` by `coray_kdtree_build`: the
-/// arena (16-byte aligned words) and its bytes.
+/// arena (16-byte aligned words, cut to what the tree uses) and the bytes
+/// the tree uses (`arena_bytes_used`).
 pub(crate) fn build_arena(
     scene: &Scene,
     preset: CorayKdPreset,
@@ -75,7 +76,25 @@ pub(crate) fn build_arena(
     if s != CorayStatus::Ok {
         return Err(s);
     }
-    Ok((arena, req.arena_bytes))
+    let mut tree = CorayKdTree { opaque: [0; 32] };
+    let mut info = CorayKdTreeInfo {
+        struct_size: core::mem::size_of::<CorayKdTreeInfo>(),
+        ..Default::default()
+    };
+    // SAFETY: the arena was just built (aligned, req.arena_bytes long); c
+    // points to `scene`'s arrays; tree and info are live locals.
+    let s = unsafe {
+        match coray_kdtree_open(arena.as_ptr().cast(), req.arena_bytes, &c, &mut tree) {
+            CorayStatus::Ok => coray_kdtree_info(&tree, &mut info),
+            e => e,
+        }
+    };
+    if s != CorayStatus::Ok {
+        return Err(s);
+    }
+    arena.truncate(info.arena_bytes_used.div_ceil(16).max(1));
+    arena.shrink_to_fit();
+    Ok((arena, info.arena_bytes_used))
 }
 
 /// `scene` as the C ABI's struct (pointers to its arrays).

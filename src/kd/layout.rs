@@ -86,20 +86,67 @@ impl KdArenaLayout {
         at(lo)
     }
 
+    /// The layout holding exactly what a tree with `info` uses.
+    pub fn tight(info: &KdInfo) -> Option<KdArenaLayout> {
+        let n = |x: u32| x as usize;
+        KdArenaLayout::of(&KdRequirements {
+            nodes: n(info.node_count),
+            leaves: n(info.leaf_count),
+            ropes: n(info.leaf_count),
+            refs: n(info.ref_count),
+            events: 0,
+            prim_flags: 0,
+        })
+    }
+
     /// Bytes of an arena holding exactly what a tree with `info` uses.
     pub fn used_by(info: &KdInfo) -> Option<usize> {
-        let n = |x: u32| x as usize;
-        Some(
-            KdArenaLayout::of(&KdRequirements {
-                nodes: n(info.node_count),
-                leaves: n(info.leaf_count),
-                ropes: n(info.leaf_count),
-                refs: n(info.ref_count),
-                events: 0,
-                prim_flags: 0,
-            })?
-            .total_bytes,
-        )
+        Some(KdArenaLayout::tight(info)?.total_bytes)
+    }
+
+    /// Moves the parts of a tree with `info`, built in `arena` laid out as
+    /// `self`, to the [`KdArenaLayout::tight`] layout at the arena's start,
+    /// and zeroes the rest of `self`'s bytes: the tree then needs only the
+    /// tight layout's bytes (a caller may shrink or copy the arena to them).
+    /// The header is left to the caller. `None` (nothing moved) when the
+    /// counts exceed this layout's or the arena is shorter than it.
+    pub fn pack(&self, info: &KdInfo, arena: &mut [u8]) -> Option<KdArenaLayout> {
+        let tight = KdArenaLayout::tight(info)?;
+        let (c, t) = (&self.counts, &tight.counts);
+        if t.nodes > c.nodes || t.leaves > c.leaves || t.refs > c.refs {
+            return None;
+        }
+        let arena = arena.get_mut(..self.total_bytes)?;
+        // Parts keep their order and shrink, so each one's new place ends
+        // before the next one's old place starts: moving them in order
+        // never overwrites a part not yet moved.
+        let parts = [
+            (
+                self.nodes_offset,
+                tight.nodes_offset,
+                t.nodes * size_of::<KdNode>(),
+            ),
+            (
+                self.leaves_offset,
+                tight.leaves_offset,
+                t.leaves * size_of::<KdLeaf>(),
+            ),
+            (
+                self.ropes_offset,
+                tight.ropes_offset,
+                t.ropes * size_of::<KdRopes>(),
+            ),
+            (
+                self.refs_offset,
+                tight.refs_offset,
+                t.refs * size_of::<u32>(),
+            ),
+        ];
+        for (from, to, bytes) in parts {
+            arena.copy_within(from..from + bytes, to);
+        }
+        arena[tight.total_bytes..].fill(0);
+        Some(tight)
     }
 }
 
@@ -278,6 +325,53 @@ mod tests {
             ..KdArenaHeader::default()
         };
         assert!(h.layout(usize::MAX).is_err());
+    }
+
+    #[test]
+    fn pack_moves_each_part_to_the_tight_layout_and_zeroes_the_rest() {
+        let room = KdArenaLayout::of(&counts(9, 5, 12)).unwrap();
+        let info = KdInfo {
+            node_count: 5,
+            leaf_count: 3,
+            ref_count: 7,
+            ..KdInfo::default()
+        };
+        let tight = KdArenaLayout::tight(&info).unwrap();
+        // Every used byte of a part holds its part's tag and its index.
+        let mut arena = [0xEEu8; 1024];
+        assert!(room.total_bytes < arena.len());
+        let used = |l: &KdArenaLayout| {
+            [
+                (l.nodes_offset, 5 * 8),
+                (l.leaves_offset, 3 * 8),
+                (l.ropes_offset, 3 * 48),
+                (l.refs_offset, 7 * 4),
+            ]
+        };
+        for (k, (o, n)) in used(&room).into_iter().enumerate() {
+            for i in 0..n {
+                arena[o + i] = (k * 64 + i % 61) as u8;
+            }
+        }
+        assert_eq!(room.pack(&info, &mut arena), Some(tight));
+        for (k, (o, n)) in used(&tight).into_iter().enumerate() {
+            for i in 0..n {
+                assert_eq!(arena[o + i], (k * 64 + i % 61) as u8, "part {k} byte {i}");
+            }
+        }
+        assert!(arena[tight.total_bytes..room.total_bytes]
+            .iter()
+            .all(|&b| b == 0));
+        assert!(
+            arena[room.total_bytes..].iter().all(|&b| b == 0xEE),
+            "past the room"
+        );
+        let too_many = KdInfo {
+            node_count: 10,
+            ..info
+        };
+        assert_eq!(room.pack(&too_many, &mut arena), None);
+        assert_eq!(room.pack(&info, &mut arena[..room.total_bytes - 1]), None);
     }
 
     #[test]
