@@ -343,11 +343,37 @@ impl<'a> KdTree<'a> {
         t1: f32,
         steps: &mut Steps,
     ) -> bool {
+        // The counters live in registers during the walk.
+        let mut counted = *steps;
+        let stopped = self.walk_counted(v, rec, stack, start, t0, t1, &mut counted);
+        *steps = counted;
+        stopped
+    }
+
+    /// [`KdTree::walk_from`] on counters it may keep in registers.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn walk_counted<V: LeafVisitor, R: Recorder>(
+        &self,
+        v: &mut V,
+        rec: &mut R,
+        stack: &mut [KdStackItem],
+        start: u32,
+        t0: f32,
+        t1: f32,
+        steps: &mut Steps,
+    ) -> bool {
         let Some(stack) = stack.get_mut(..KD_STACK_LEN) else {
             steps.fault();
             return true;
         };
         let r = *v.ray();
+        // The ray per axis as arrays of 4 (the node's axis, masked to 0..4,
+        // indexes them without a bounds check or a branch per axis).
+        let origin = r.origin.extend(0.0).to_array();
+        let dir = r.dir.extend(0.0).to_array();
+        let inv_dir = r.inv_dir.extend(0.0).to_array();
+        let heads_up = [dir[0] > 0.0, dir[1] > 0.0, dir[2] > 0.0, false];
         stack[0] = KdStackItem {
             node: NO_NODE,
             t: t1,
@@ -359,28 +385,29 @@ impl<'a> KdTree<'a> {
         loop {
             let mut nd = self.node(node);
             while !nd.is_leaf() {
-                if budget == 0 || ex + 2 >= KD_STACK_LEN {
+                // (ex < KD_STACK_LEN - 2 from here: no bounds checks below.)
+                if budget == 0 || ex >= KD_STACK_LEN - 2 {
                     steps.fault();
                     return true;
                 }
                 budget -= 1;
                 steps.interior += 1;
-                let (a, s, left) = (nd.axis(), nd.split(), nd.index());
+                let (a, s, left) = (nd.axis() & 3, nd.split(), nd.index());
                 let right = left.wrapping_add(1);
                 let ex_t = stack[ex].t;
                 // Where the ray meets the plane: the segment [en_t, ex_t]
                 // lies on one side of it, or crosses it there.
                 // A ray parallel to the plane stays on its origin's side
                 // (d = inf: the near side only), or lies in it (NaN).
-                let (o, da) = (r.origin[a], r.dir[a]);
-                let d = if da != 0.0 {
-                    (s - o) * r.inv_dir[a]
+                // `up`: the ray heads to the left child's side first.
+                let (o, da) = (origin[a], dir[a]);
+                let (d, up) = if da != 0.0 {
+                    ((s - o) * inv_dir[a], heads_up[a])
                 } else if o != s {
-                    f32::INFINITY
+                    (f32::INFINITY, o < s)
                 } else {
-                    f32::NAN
+                    (f32::NAN, false)
                 };
-                let up = da > 0.0 || (da == 0.0 && o < s);
                 let (near, far) = if up { (left, right) } else { (right, left) };
                 let (near_only, far_only, both) = if up {
                     (Decision::Left, Decision::Right, Decision::LeftRight)
