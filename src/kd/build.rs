@@ -92,6 +92,15 @@ impl Task {
 /// relative to the node's extent or coordinates (see `find_split`).
 use crate::tolerance::FACE_CELL;
 
+/// What every candidate plane of one node's sweep shares.
+struct SweepNode {
+    voxel: Aabb,
+    /// The voxel's extent, in f64 for the areas.
+    extent: [f64; 3],
+    inv_area: f64,
+    prims: usize,
+}
+
 /// The best plane of a node's sweep.
 #[derive(Clone, Copy, Debug)]
 struct Split {
@@ -124,13 +133,15 @@ fn area_of_extent(e: [f64; 3]) -> f64 {
     2.0 * (e[0] * e[1] + e[1] * e[2] + e[2] * e[0])
 }
 
-/// Area of the node's box with its extent on `axis` replaced by `along`
+/// Area of the node's box with its extent on `AXIS` replaced by `along`
 /// (the extent of a candidate child): as `area64` of that child's box,
-/// bit for bit, without building it.
-#[inline]
-fn area_along(extent: [f64; 3], axis: usize, along: f32) -> f64 {
+/// bit for bit, without building it. `AXIS` is a constant so the extent
+/// stays in registers (an indexed store then a vector load of the same
+/// array stalls on store forwarding, twice per candidate).
+#[inline(always)]
+fn area_along<const AXIS: usize>(extent: [f64; 3], along: f32) -> f64 {
     let mut e = extent;
-    e[axis] = along as f64;
+    e[AXIS] = along as f64;
     area_of_extent(e)
 }
 
@@ -382,8 +393,34 @@ impl<'s, 'a> Builder<'s, 'a> {
         if !(area > 0.0 && area.is_finite()) {
             return None;
         }
-        let inv_area = 1.0 / area;
-        let extent = (v.max - v.min).as_dvec3().to_array();
+        let node = SweepNode {
+            voxel: *v,
+            extent: (v.max - v.min).as_dvec3().to_array(),
+            inv_area: 1.0 / area,
+            prims: task.prims,
+        };
+        let mut best: Option<Split> = None;
+        self.sweep::<0>(&node, task.axis_range(0), &mut best);
+        self.sweep::<1>(&node, task.axis_range(1), &mut best);
+        self.sweep::<2>(&node, task.axis_range(2), &mut best);
+        best
+    }
+
+    /// One axis of [`Self::find_split`]: every candidate plane among the
+    /// axis' events `[s, e)`, kept in `best` when it is cheaper (ties keep
+    /// the earlier axis and position).
+    #[inline(always)]
+    fn sweep<const AXIS: usize>(
+        &self,
+        node: &SweepNode,
+        (s, e): (usize, usize),
+        best: &mut Option<Split>,
+    ) {
+        let v = &node.voxel;
+        let (lo, hi) = (v.min[AXIS], v.max[AXIS]);
+        if !(lo < hi) {
+            return;
+        }
         let (kt, ki, bonus) = (
             self.params.cost_traversal,
             self.params.cost_intersection,
@@ -397,74 +434,66 @@ impl<'s, 'a> Builder<'s, 'a> {
                 c
             }
         };
-        let mut best: Option<Split> = None;
-        for axis in 0..3 {
-            if !(v.min[axis] < v.max[axis]) {
-                continue;
+        let (extent, inv_area) = (node.extent, node.inv_area);
+        let mut consider = |pos: f32, nl: usize, nr: usize, planars: usize| {
+            let pl = (area_along::<AXIS>(extent, pos - lo) * inv_area) as f32;
+            let pr = (area_along::<AXIS>(extent, hi - pos) * inv_area) as f32;
+            let cl = cost(pl, pr, nl + planars, nr);
+            let cr = cost(pl, pr, nl, nr + planars);
+            let (c, planar_left) = if cl <= cr { (cl, true) } else { (cr, false) };
+            if best.is_none_or(|b| c < b.cost) {
+                *best = Some(Split {
+                    axis: AXIS,
+                    pos,
+                    planar_left,
+                    cost: c,
+                });
             }
-            let (s, e) = task.axis_range(axis);
-            let ev = &self.events[s..e];
-            let (mut nl, mut nr) = (0usize, task.prims);
-            let mut i = 0;
-            while i < ev.len() {
-                let p = ev[i].pos;
-                let (mut ends, mut planars, mut starts) = (0, 0, 0);
-                while i < ev.len() && ev[i].pos == p && ev[i].kind() == END {
-                    ends += 1;
-                    i += 1;
-                }
-                while i < ev.len() && ev[i].pos == p && ev[i].kind() == PLANAR {
-                    planars += 1;
-                    i += 1;
-                }
-                while i < ev.len() && ev[i].pos == p && ev[i].kind() == START {
-                    starts += 1;
-                    i += 1;
-                }
-                nr -= planars + ends;
-                let mut consider = |pos: f32, nl: usize, nr: usize, planars: usize| {
-                    let pl = (area_along(extent, axis, pos - v.min[axis]) * inv_area) as f32;
-                    let pr = (area_along(extent, axis, v.max[axis] - pos) * inv_area) as f32;
-                    let cl = cost(pl, pr, nl + planars, nr);
-                    let cr = cost(pl, pr, nl, nr + planars);
-                    let (c, planar_left) = if cl <= cr { (cl, true) } else { (cr, false) };
-                    if best.is_none_or(|b| c < b.cost) {
-                        best = Some(Split {
-                            axis,
-                            pos,
-                            planar_left,
-                            cost: c,
-                        });
-                    }
-                };
-                if p > v.min[axis] && p < v.max[axis] {
-                    consider(p, nl, nr, planars);
-                } else if planars > 0 {
-                    // Planar primitives on a face of the node (a floor under
-                    // the scene): a split just inside cuts them off into a
-                    // thin cell, so the cells above stop referencing them.
-                    // Primitives starting on the face straddle the split.
-                    // The cell is 2^-12 of the node's extent or of its
-                    // coordinates' magnitude, whichever is larger: thousands
-                    // of ulps, far above the rounding of a ray's points on
-                    // that face, so no traversal (from the root or from an
-                    // LCTS entry) can classify a point across it
-                    // differently. Nodes thinner than that keep their faces.
-                    let (lo, hi) = (v.min[axis], v.max[axis]);
-                    let thick = (hi - lo).max(lo.abs()).max(hi.abs()) * FACE_CELL;
-                    let inside = if p == lo { p + thick } else { p - thick };
-                    if 2.0 * thick < hi - lo {
-                        if p == v.min[axis] {
-                            consider(inside, planars + starts, nr, 0);
-                        } else {
-                            consider(inside, nl, planars + ends, 0);
-                        }
+        };
+        let ev = &self.events[s..e];
+        let (mut nl, mut nr) = (0usize, node.prims);
+        let mut i = 0;
+        while i < ev.len() {
+            let p = ev[i].pos;
+            let (mut ends, mut planars, mut starts) = (0, 0, 0);
+            while i < ev.len() && ev[i].pos == p && ev[i].kind() == END {
+                ends += 1;
+                i += 1;
+            }
+            while i < ev.len() && ev[i].pos == p && ev[i].kind() == PLANAR {
+                planars += 1;
+                i += 1;
+            }
+            while i < ev.len() && ev[i].pos == p && ev[i].kind() == START {
+                starts += 1;
+                i += 1;
+            }
+            nr -= planars + ends;
+            if p > lo && p < hi {
+                consider(p, nl, nr, planars);
+            } else if planars > 0 {
+                // Planar primitives on a face of the node (a floor under
+                // the scene): a split just inside cuts them off into a
+                // thin cell, so the cells above stop referencing them.
+                // Primitives starting on the face straddle the split.
+                // The cell is 2^-12 of the node's extent or of its
+                // coordinates' magnitude, whichever is larger: thousands
+                // of ulps, far above the rounding of a ray's points on
+                // that face, so no traversal (from the root or from an
+                // LCTS entry) can classify a point across it
+                // differently. Nodes thinner than that keep their faces.
+                let thick = (hi - lo).max(lo.abs()).max(hi.abs()) * FACE_CELL;
+                let inside = if p == lo { p + thick } else { p - thick };
+                if 2.0 * thick < hi - lo {
+                    if p == lo {
+                        consider(inside, planars + starts, nr, 0);
+                    } else {
+                        consider(inside, nl, planars + ends, 0);
                     }
                 }
-                nl += starts + planars;
             }
+            nl += starts + planars;
         }
-        best
     }
 
     /// Splits `task` when the termination rule and the room allow; returns
