@@ -12,7 +12,6 @@ use super::node::{KdInfo, KdLeaf, KdNode, KD_FLAG_TRUNCATED, KD_MAGIC, KD_MAX_DE
 use super::{min_requirements, ropes, KdParams, KdScratch, KdStorage, KdTree};
 use crate::geom::{Aabb, Scene};
 use crate::Error;
-use core::cmp::Ordering;
 
 /// One split event: a primitive's clipped box starts, ends or lies flat at
 /// `pos` on some axis. `word` is `prim << 2 | kind`.
@@ -49,14 +48,19 @@ impl KdEvent {
     fn kind(&self) -> u32 {
         self.word & 3
     }
-    /// Sweep order: position, then end < planar < start, then primitive
-    /// (which makes the build deterministic).
-    fn order(a: &KdEvent, b: &KdEvent) -> Ordering {
-        a.pos
-            .partial_cmp(&b.pos)
-            .unwrap_or(Ordering::Equal)
-            .then((a.word & 3).cmp(&(b.word & 3)))
-            .then(a.word.cmp(&b.word))
+    /// Sweep order as one integer: position, then end < planar < start,
+    /// then primitive (which makes the build deterministic). The position's
+    /// bits are mapped so that integers order as the floats do (events
+    /// hold no -0.0, see [`KdEvent::new`]); primitives fit in 30 bits.
+    #[inline(always)]
+    fn key(&self) -> u64 {
+        let bits = self.pos.to_bits();
+        let ordered = if bits >> 31 == 1 {
+            !bits
+        } else {
+            bits | 1 << 31
+        };
+        (ordered as u64) << 32 | ((self.word & 3) << 30 | self.word >> 2) as u64
     }
 }
 
@@ -322,7 +326,7 @@ impl<'s, 'a> Builder<'s, 'a> {
                     push_events(self.events, &mut at, p, &b, axis);
                 }
             }
-            self.events[s..at].sort_unstable_by(KdEvent::order);
+            self.events[s..at].sort_unstable_by_key(KdEvent::key);
             *count = at - s;
         }
         Task {
@@ -619,8 +623,8 @@ impl<'s, 'a> Builder<'s, 'a> {
             let (s, e) = task.axis_range(axis);
             let lnew = top + axis * s2;
             let rnew = top + 6 * straddling + axis * s2;
-            self.events[lnew..lnew + tl[axis]].sort_unstable_by(KdEvent::order);
-            self.events[rnew..rnew + tr[axis]].sort_unstable_by(KdEvent::order);
+            self.events[lnew..lnew + tl[axis]].sort_unstable_by_key(KdEvent::key);
+            self.events[rnew..rnew + tr[axis]].sort_unstable_by_key(KdEvent::key);
             let (l0, r0) = (lat, rat);
             self.merge(
                 (s, e),
@@ -686,7 +690,7 @@ impl<'s, 'a> Builder<'s, 'a> {
             };
             // New events that sort before this old one go first (an old
             // event goes before a new one it ties with).
-            while *j < end && KdEvent::order(&ev, &self.events[*j]) == Ordering::Greater {
+            while *j < end && ev.key() > self.events[*j].key() {
                 self.events[*out] = self.events[*j];
                 *j += 1;
                 *out += 1;
@@ -698,6 +702,51 @@ impl<'s, 'a> Builder<'s, 'a> {
             let n = end - j;
             self.events.copy_within(j..end, *out);
             *out += n;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The integer key orders as position, then kind, then primitive.
+    #[test]
+    fn key_orders_by_position_kind_and_primitive() {
+        let positions = [
+            f32::NEG_INFINITY,
+            -3.5e30,
+            -2.0,
+            -1e-40,
+            -0.0,
+            0.0,
+            1e-40,
+            0.5,
+            2.0,
+            7.25e30,
+            f32::INFINITY,
+        ];
+        let mut events = [KdEvent::default(); 11 * 3 * 3];
+        let mut i = 0;
+        for &pos in &positions {
+            for kind in [END, PLANAR, START] {
+                for prim in [0, 5, (1 << 30) - 1] {
+                    events[i] = KdEvent::new(pos, prim, kind);
+                    i += 1;
+                }
+            }
+        }
+        let reference = |a: &KdEvent, b: &KdEvent| {
+            a.pos
+                .partial_cmp(&b.pos)
+                .unwrap()
+                .then(a.kind().cmp(&b.kind()))
+                .then(a.prim().cmp(&b.prim()))
+        };
+        for a in &events {
+            for b in &events {
+                assert_eq!(a.key().cmp(&b.key()), reference(a, b), "{a:?} {b:?}");
+            }
         }
     }
 }
