@@ -546,25 +546,16 @@ impl<'s, 'a> Builder<'s, 'a> {
                 }
             }
         }
-        let mut el_old = [0usize; 3];
-        let mut er_old = [0usize; 3];
-        for (axis, (l, r)) in el_old.iter_mut().zip(er_old.iter_mut()).enumerate() {
-            let (s, e) = task.axis_range(axis);
-            for i in s..e {
-                match self.flags[self.events[i].prim()] {
-                    LEFT => *l += 1,
-                    RIGHT => *r += 1,
-                    _ => {}
-                }
-            }
-        }
 
         // New events of the straddling primitives, clipped into each child.
         let top = task.start + task.total();
         let s2 = 2 * straddling;
         let dest = top + 12 * straddling;
-        let old_total: usize = el_old.iter().sum::<usize>() + er_old.iter().sum::<usize>();
-        if dest + old_total + 12 * straddling > self.events.len() {
+        // The children's events are written at `dest` (left) and after
+        // room for the most the left side can have (right): at most six
+        // old events per primitive on one side, plus its new ones. No pass
+        // counts them first.
+        if dest + 6 * (left_only + right_only) + 12 * straddling > self.events.len() {
             self.truncated = true;
             return None;
         }
@@ -612,13 +603,11 @@ impl<'s, 'a> Builder<'s, 'a> {
             self.truncated = true;
             return None;
         }
-        let el: usize = el_old.iter().sum::<usize>() + tl.iter().sum::<usize>();
-        let er: usize = er_old.iter().sum::<usize>() + tr.iter().sum::<usize>();
-
         // Merge old and new events per axis into the two destinations.
+        let right_dest = dest + 6 * left_only + tl.iter().sum::<usize>();
         let mut lcounts = [0usize; 3];
         let mut rcounts = [0usize; 3];
-        let (mut lat, mut rat) = (dest, dest + el);
+        let (mut lat, mut rat) = (dest, right_dest);
         for axis in 0..3 {
             let (s, e) = task.axis_range(axis);
             let lnew = top + axis * s2;
@@ -635,10 +624,11 @@ impl<'s, 'a> Builder<'s, 'a> {
             lcounts[axis] = lat - l0;
             rcounts[axis] = rat - r0;
         }
+        let er = rat - right_dest;
         // Right child first at the node's base (it waits), left on top.
         let base = task.start;
-        self.events.copy_within(dest + el..dest + el + er, base);
-        self.events.copy_within(dest..dest + el, base + er);
+        self.events.copy_within(right_dest..rat, base);
+        self.events.copy_within(dest..lat, base + er);
 
         let c = self.node_top as u32;
         self.node_top += 2;
