@@ -77,10 +77,15 @@ pub fn clip_triangle_bounds(v: [Vec3; 3], voxel: &Aabb) -> Option<Aabb> {
                     p[axis] >= plane
                 }
             };
+            // A plane with every vertex on its inner side leaves the
+            // polygon as it is (same vertices, same order): skip it.
+            if poly[..n].iter().all(|&p| inside(p)) {
+                continue;
+            }
             let mut m = 0;
             for i in 0..n {
                 let p = poly[i];
-                let q = poly[(i + 1) % n];
+                let q = poly[if i + 1 == n { 0 } else { i + 1 }];
                 let (pin, qin) = (inside(p), inside(q));
                 if pin {
                     tmp[m] = p;
@@ -110,5 +115,113 @@ pub fn clip_triangle_bounds(v: [Vec3; 3], voxel: &Aabb) -> Option<Aabb> {
         None
     } else {
         Some(b)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::SplitMix64;
+
+    /// Sutherland-Hodgman against all six planes, no shortcut: the
+    /// reference the clipping must equal bit for bit.
+    fn clip_every_plane(v: [Vec3; 3], voxel: &Aabb) -> Option<Aabb> {
+        let mut poly = [Vec3::ZERO; 9];
+        let mut tmp = [Vec3::ZERO; 9];
+        poly[..3].copy_from_slice(&v);
+        let mut n = 3;
+        for axis in 0..3 {
+            for (plane, keep_below) in [(voxel.min[axis], false), (voxel.max[axis], true)] {
+                let inside = |p: Vec3| {
+                    if keep_below {
+                        p[axis] <= plane
+                    } else {
+                        p[axis] >= plane
+                    }
+                };
+                let mut m = 0;
+                for i in 0..n {
+                    let (p, q) = (poly[i], poly[(i + 1) % n]);
+                    if inside(p) {
+                        tmp[m] = p;
+                        m += 1;
+                    }
+                    if inside(p) != inside(q) && m < 9 {
+                        let s = (plane - p[axis]) / (q[axis] - p[axis]);
+                        let mut x = p + (q - p) * s;
+                        x[axis] = plane;
+                        tmp[m] = x;
+                        m += 1;
+                    }
+                }
+                n = m;
+                if n == 0 {
+                    return None;
+                }
+                poly[..n].copy_from_slice(&tmp[..n]);
+            }
+        }
+        let b = poly[..n]
+            .iter()
+            .fold(Aabb::EMPTY, |b, p| b.grow(*p))
+            .intersection(voxel);
+        (!b.is_empty()).then_some(b)
+    }
+
+    /// Skipping the planes no vertex crosses changes no bit of the result,
+    /// over triangles inside, across and outside boxes, some on a face.
+    #[test]
+    fn clipping_equals_clipping_by_every_plane() {
+        let mut rng = SplitMix64(77);
+        let coord = |rng: &mut SplitMix64| {
+            // Coordinates on a coarse grid now and then, so that vertices
+            // land exactly on the box's faces.
+            let x = rng.next_f32() * 4.0 - 2.0;
+            if rng.below(4) == 0 {
+                libm::roundf(x * 2.0) / 2.0
+            } else {
+                x
+            }
+        };
+        let (mut clipped, mut whole, mut none) = (0, 0, 0);
+        for _ in 0..20_000 {
+            let mut p = || Vec3::new(coord(&mut rng), coord(&mut rng), coord(&mut rng));
+            let v = [p(), p(), p()];
+            let (a, b) = (p(), p());
+            let voxel = if rng.below(8) == 0 {
+                // A box around the whole triangle.
+                Aabb {
+                    min: Vec3::splat(-2.0),
+                    max: Vec3::splat(2.0),
+                }
+            } else {
+                Aabb {
+                    min: a.min(b),
+                    max: a.max(b),
+                }
+            };
+            let want = clip_every_plane(v, &voxel);
+            let got = clip_triangle_bounds(v, &voxel);
+            assert_eq!(
+                got.map(|b| (
+                    b.min.to_array().map(f32::to_bits),
+                    b.max.to_array().map(f32::to_bits)
+                )),
+                want.map(|b| (
+                    b.min.to_array().map(f32::to_bits),
+                    b.max.to_array().map(f32::to_bits)
+                )),
+                "{v:?} in {voxel:?}"
+            );
+            match got {
+                None => none += 1,
+                Some(b) if b == Aabb::EMPTY.grow(v[0]).grow(v[1]).grow(v[2]) => whole += 1,
+                Some(_) => clipped += 1,
+            }
+        }
+        assert!(
+            clipped > 1000 && whole > 100 && none > 1000,
+            "{clipped} {whole} {none}"
+        );
     }
 }
