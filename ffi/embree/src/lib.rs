@@ -189,16 +189,16 @@ impl EmbreeScene {
         }
     }
 
-    /// Fills lanes `0..rays.len()` (at most 8) of a packet; the rest stay
-    /// invalid.
-    fn packet(rays: &[Ray]) -> ([i32; 8], RTCRay8) {
-        let mut valid = [0i32; 8];
+    /// Fills lanes `0..rays.len()` (at most 8) of a packet and its valid
+    /// mask; the rest stay invalid.
+    fn packet(rays: &[Ray]) -> (Valid8, RTCRay8) {
+        let mut valid = Valid8([0; 8]);
         let mut p = RTCRay8 {
             mask: [u32::MAX; 8],
             ..RTCRay8::default()
         };
         for (i, r) in rays.iter().enumerate().take(8) {
-            valid[i] = -1;
+            valid.0[i] = -1;
             p.org_x[i] = r.origin.x;
             p.org_y[i] = r.origin.y;
             p.org_z[i] = r.origin.z;
@@ -225,9 +225,9 @@ impl EmbreeScene {
                     ..RTCHit8::default()
                 },
             };
-            // SAFETY: a committed scene; valid mask, context and the
-            // 32-byte aligned ray-hit packet live on our stack.
-            unsafe { rtcIntersect8(valid.as_ptr(), self.scene, &mut ctx, &mut rh) };
+            // SAFETY: a committed scene; the 32-byte aligned valid mask and
+            // ray-hit packet and the context live on our stack.
+            unsafe { rtcIntersect8(valid.0.as_ptr(), self.scene, &mut ctx, &mut rh) };
             for (i, h) in hits.iter_mut().enumerate() {
                 let g = rh.hit.geomID[i];
                 *h = if g == RTC_INVALID_GEOMETRY_ID {
@@ -252,7 +252,7 @@ impl EmbreeScene {
         for (chunk, occ) in rays.chunks(8).zip(out.chunks_mut(8)) {
             let (valid, mut ray) = Self::packet(chunk);
             // SAFETY: as in intersect8.
-            unsafe { rtcOccluded8(valid.as_ptr(), self.scene, &mut ctx, &mut ray) };
+            unsafe { rtcOccluded8(valid.0.as_ptr(), self.scene, &mut ctx, &mut ray) };
             for (i, o) in occ.iter_mut().enumerate() {
                 *o = ray.tfar[i] == f32::NEG_INFINITY;
             }
@@ -325,3 +325,10 @@ impl Drop for EmbreeScene {
 /// (`coray::tolerance`), shared by the cross-checks, `coray compare` and
 /// `coray bench`.
 pub use coray::tolerance::{classify, classify_occluded, grazing, t_tolerance, Agreement};
+
+/// The valid mask of an 8-wide call: Embree loads it with an aligned
+/// 32-byte load (`vmovdqa`), so a plain `[i32; 8]` (4-byte aligned) made
+/// rtcOccluded8 fault whenever the stack put it at an odd 16 bytes.
+#[repr(C, align(32))]
+struct Valid8([i32; 8]);
+const _: () = assert!(core::mem::align_of::<Valid8>() == 32);
