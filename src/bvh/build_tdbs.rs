@@ -25,14 +25,25 @@ fn area(b: &Aabb) -> f64 {
     2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
 }
 
-/// Sorts `run` by box centre on `axis` (index breaks ties: the build is
-/// the same on every machine).
-fn sort_run(run: &mut [u32], boxes: &[Aabb], axis: usize) {
-    run.sort_unstable_by(|&a, &b| {
-        centre(&boxes[a as usize], axis)
-            .total_cmp(&centre(&boxes[b as usize], axis))
-            .then(a.cmp(&b))
-    });
+/// Sweep order on `axis` as one integer: box centre (as `f32::total_cmp`
+/// orders it), then primitive index (so the build is the same on every
+/// machine).
+#[inline(always)]
+fn centre_key(boxes: &[Aabb], axis: usize, prim: u32) -> u64 {
+    let bits = centre(&boxes[prim as usize], axis).to_bits();
+    let ordered = if bits >> 31 == 1 {
+        !bits
+    } else {
+        bits | 1 << 31
+    };
+    (ordered as u64) << 32 | prim as u64
+}
+
+/// `links` a TDBS build needs for `n` primitives: a depth per pair of
+/// siblings, the references in centre order on each axis, and one run's
+/// right side while it is partitioned.
+pub(crate) fn links_needed(n: usize) -> usize {
+    n.saturating_mul(5)
 }
 
 pub(crate) fn build<'a>(
@@ -55,17 +66,29 @@ pub(crate) fn build<'a>(
     let boxes = &mut scratch.boxes[..];
     let suffix = &mut scratch.keys[..];
     let n = gather(scene, source, boxes, refs)?;
+    let boxes = &*boxes;
     let mut root_box = Aabb::EMPTY;
     for &p in &refs[..n] {
         root_box = root_box.union(&boxes[p as usize]);
     }
     nodes[0] = BvhNode::leaf(&root_box, 0, n as u32);
-    // Depth per pair of siblings (root: pair 0; nodes 2p - 1 and 2p: pair p).
-    let level = &mut scratch.links[..];
-    let pair = |i: usize| i.div_ceil(2);
-    if let Some(l) = level.first_mut() {
-        *l = 0;
+    // Depth per pair of siblings (root: pair 0; nodes 2p - 1 and 2p: pair
+    // p), then the references sorted by centre on each axis, once: a
+    // node's run in each order is its part of the parent's, partitioned
+    // stably, so no node sorts again (the sweeps see the same sequences
+    // as sorting each run would give, hence the same tree).
+    let (level, rest) = scratch.links.split_at_mut(n.max(1));
+    let (by_x, rest) = rest.split_at_mut(n);
+    let (by_y, rest) = rest.split_at_mut(n);
+    let (by_z, rest) = rest.split_at_mut(n);
+    let right_side = &mut rest[..n];
+    let mut order = [by_x, by_y, by_z];
+    for (axis, o) in order.iter_mut().enumerate() {
+        o.copy_from_slice(&refs[..n]);
+        o.sort_unstable_by_key(|&p| centre_key(boxes, axis, p));
     }
+    let pair = |i: usize| i.div_ceil(2);
+    level[0] = 0;
     let (mut top, mut i, mut depth) = (1usize, 0usize, 0u32);
     while i < top {
         let nd = nodes[i];
@@ -76,11 +99,10 @@ pub(crate) fn build<'a>(
             i += 1;
             continue;
         }
-        let run = &mut refs[first..first + count];
         // (criterion, axis, left count): smaller criterion is better.
         let mut best: Option<(f64, usize, usize)> = None;
-        for axis in 0..3 {
-            sort_run(run, boxes, axis);
+        for (axis, o) in order.iter().enumerate() {
+            let run = &o[first..first + count];
             let mut acc = Aabb::EMPTY;
             for k in (1..count).rev() {
                 acc = acc.union(&boxes[run[k] as usize]);
@@ -100,15 +122,24 @@ pub(crate) fn build<'a>(
             }
         }
         let (_, axis, k) = best.expect("count >= 2");
-        if axis != 2 {
-            sort_run(run, boxes, axis);
-        }
+        let run = &order[axis][first..first + count];
+        // The run as the split axis orders it: the references a child
+        // keeps if it stays a leaf.
+        refs[first..first + count].copy_from_slice(run);
+        let pivot = centre_key(boxes, axis, run[k]);
         let (mut bl, mut br) = (Aabb::EMPTY, Aabb::EMPTY);
         for &p in &run[..k] {
             bl = bl.union(&boxes[p as usize]);
         }
         for &p in &run[k..] {
             br = br.union(&boxes[p as usize]);
+        }
+        for (b, o) in order.iter_mut().enumerate() {
+            if b != axis {
+                partition(&mut o[first..first + count], right_side, |p| {
+                    centre_key(boxes, axis, p) < pivot
+                });
+            }
         }
         nodes[top] = BvhNode::leaf(&bl, first as u32, k as u32);
         nodes[top + 1] = BvhNode::leaf(&br, (first + k) as u32, (count - k) as u32);
@@ -118,4 +149,249 @@ pub(crate) fn build<'a>(
         i += 1;
     }
     Ok(binary(scene, nodes, refs, top, n, depth))
+}
+
+/// Moves the elements of `run` for which `left` holds to its front and the
+/// others after them, each side in its order, using `spare` (at least as
+/// long as `run`).
+fn partition(run: &mut [u32], spare: &mut [u32], left: impl Fn(u32) -> bool) {
+    let (mut l, mut r) = (0, 0);
+    for i in 0..run.len() {
+        let p = run[i];
+        if left(p) {
+            run[l] = p;
+            l += 1;
+        } else {
+            spare[r] = p;
+            r += 1;
+        }
+    }
+    run[l..].copy_from_slice(&spare[..r]);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The integer key orders as `f32::total_cmp` on the centres, then
+    /// the primitive index.
+    #[test]
+    fn centre_key_orders_as_total_cmp_then_index() {
+        let v = [
+            f32::NEG_INFINITY,
+            -7e30,
+            -1.0,
+            -1e-42,
+            -0.0,
+            0.0,
+            1e-42,
+            0.25,
+            3e30,
+            f32::INFINITY,
+        ];
+        let mut boxes = [Aabb::EMPTY; 30];
+        for (i, b) in boxes.iter_mut().enumerate() {
+            let c = v[i % v.len()];
+            *b = Aabb {
+                min: crate::Vec3::splat(c),
+                max: crate::Vec3::splat(c),
+            };
+        }
+        for axis in 0..3 {
+            for a in 0..30u32 {
+                for b in 0..30u32 {
+                    let (ca, cb) = (
+                        centre(&boxes[a as usize], axis),
+                        centre(&boxes[b as usize], axis),
+                    );
+                    assert_eq!(
+                        centre_key(&boxes, axis, a).cmp(&centre_key(&boxes, axis, b)),
+                        ca.total_cmp(&cb).then(a.cmp(&b)),
+                        "{ca} {cb}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// The build as it was: every node sorts its run on each axis. The
+    /// presorted build must give the same hierarchy, node for node.
+    /// Sorts `run` by box centre on `axis` (index breaks ties: the build is
+    /// the same on every machine).
+    fn sort_run(run: &mut [u32], boxes: &[Aabb], axis: usize) {
+        run.sort_unstable_by(|&a, &b| {
+            centre(&boxes[a as usize], axis)
+                .total_cmp(&centre(&boxes[b as usize], axis))
+                .then(a.cmp(&b))
+        });
+    }
+
+    fn build_sorting_each_run<'a>(
+        scene: &Scene<'a>,
+        source: Option<&[Aabb]>,
+        builder: Builder,
+        leaf_size: u32,
+        storage: BvhStorage<'a>,
+        scratch: BvhScratch,
+    ) -> Result<Bvh<'a>, Error> {
+        if matches!(builder, Builder::Nn | Builder::NnChain) {
+            return Err(Error::InvalidParameter { name: "builder" });
+        }
+        if leaf_size == 0 {
+            return Err(Error::InvalidParameter { name: "leaf_size" });
+        }
+        let BvhStorage { nodes, refs } = storage;
+        let boxes = &mut scratch.boxes[..];
+        let suffix = &mut scratch.keys[..];
+        let n = gather(scene, source, boxes, refs)?;
+        let mut root_box = Aabb::EMPTY;
+        for &p in &refs[..n] {
+            root_box = root_box.union(&boxes[p as usize]);
+        }
+        nodes[0] = BvhNode::leaf(&root_box, 0, n as u32);
+        // Depth per pair of siblings (root: pair 0; nodes 2p - 1 and 2p: pair p).
+        let level = &mut scratch.links[..];
+        let pair = |i: usize| i.div_ceil(2);
+        if let Some(l) = level.first_mut() {
+            *l = 0;
+        }
+        let (mut top, mut i, mut depth) = (1usize, 0usize, 0u32);
+        while i < top {
+            let nd = nodes[i];
+            let (first, count) = (nd.first as usize, nd.len() as usize);
+            let d = level.get(pair(i)).copied().unwrap_or(0);
+            if count <= leaf_size as usize {
+                depth = depth.max(d);
+                i += 1;
+                continue;
+            }
+            let run = &mut refs[first..first + count];
+            // (criterion, axis, left count): smaller criterion is better.
+            let mut best: Option<(f64, usize, usize)> = None;
+            for axis in 0..3 {
+                sort_run(run, boxes, axis);
+                let mut acc = Aabb::EMPTY;
+                for k in (1..count).rev() {
+                    acc = acc.union(&boxes[run[k] as usize]);
+                    suffix[k] = area(&acc) as f32;
+                }
+                let mut left = Aabb::EMPTY;
+                for k in 1..count {
+                    left = left.union(&boxes[run[k - 1] as usize]);
+                    let (al, ar) = (area(&left), suffix[k] as f64);
+                    let c = match builder {
+                        Builder::Tdbs => (al - ar).abs(),
+                        _ => al * k as f64 + ar * (count - k) as f64,
+                    };
+                    if best.is_none_or(|b| c.partial_cmp(&b.0) == Some(Ordering::Less)) {
+                        best = Some((c, axis, k));
+                    }
+                }
+            }
+            let (_, axis, k) = best.expect("count >= 2");
+            if axis != 2 {
+                sort_run(run, boxes, axis);
+            }
+            let (mut bl, mut br) = (Aabb::EMPTY, Aabb::EMPTY);
+            for &p in &run[..k] {
+                bl = bl.union(&boxes[p as usize]);
+            }
+            for &p in &run[k..] {
+                br = br.union(&boxes[p as usize]);
+            }
+            nodes[top] = BvhNode::leaf(&bl, first as u32, k as u32);
+            nodes[top + 1] = BvhNode::leaf(&br, (first + k) as u32, (count - k) as u32);
+            nodes[i] = BvhNode::interior(&nd.bounds(), top as u32, 2);
+            level[pair(top)] = d + 1;
+            top += 2;
+            i += 1;
+        }
+        Ok(binary(scene, nodes, refs, top, n, depth))
+    }
+
+    /// Same nodes and references as sorting every run, for both criteria
+    /// and several leaf sizes, on triangles with shared and equal centres.
+    #[test]
+    fn presorted_build_equals_sorting_each_run() {
+        use crate::rng::SplitMix64;
+        const N: usize = 400;
+        let mut rng = SplitMix64(5);
+        let mut vertices = [[0.0f32; 3]; 3 * N];
+        let mut triangles = [[0u32; 3]; N];
+        for (i, t) in triangles.iter_mut().enumerate() {
+            // A coarse grid now and then: equal centres, ties broken by index.
+            let grid = rng.below(3) == 0;
+            let c = [0; 3].map(|_| {
+                let x = rng.next_f32() * 10.0 - 5.0;
+                if grid {
+                    libm::roundf(x)
+                } else {
+                    x
+                }
+            });
+            for k in 0..3 {
+                let s = rng.next_f32() * 0.5;
+                vertices[3 * i + k] =
+                    [c[0] + s * (k as f32), c[1] - s, c[2] + s * ((k % 2) as f32)];
+            }
+            *t = [3 * i as u32, 3 * i as u32 + 1, 3 * i as u32 + 2];
+        }
+        let scene = Scene {
+            vertices: &vertices,
+            triangles: &triangles,
+            spheres: &[],
+            cones: &[],
+        };
+        for builder in [Builder::Tdbs, Builder::TdbsSah] {
+            for leaf_size in [1, 2, 5] {
+                let mut nodes = [[BvhNode::default(); 2 * N]; 2];
+                let mut refs = [[0u32; N]; 2];
+                let mut boxes = [Aabb::EMPTY; N];
+                let mut keys = [0.0f32; N];
+                let mut links = [0u32; 5 * N];
+                let [na, nb] = &mut nodes;
+                let [ra, rb] = &mut refs;
+                let a = build(
+                    &scene,
+                    None,
+                    builder,
+                    leaf_size,
+                    BvhStorage {
+                        nodes: na,
+                        refs: ra,
+                    },
+                    BvhScratch {
+                        boxes: &mut boxes,
+                        keys: &mut keys,
+                        links: &mut links,
+                        clusters: &mut [],
+                    },
+                )
+                .unwrap();
+                let (a_nodes, a_refs) = a.parts();
+                let b = build_sorting_each_run(
+                    &scene,
+                    None,
+                    builder,
+                    leaf_size,
+                    BvhStorage {
+                        nodes: nb,
+                        refs: rb,
+                    },
+                    BvhScratch {
+                        boxes: &mut boxes,
+                        keys: &mut keys,
+                        links: &mut links,
+                        clusters: &mut [],
+                    },
+                )
+                .unwrap();
+                let (b_nodes, b_refs) = b.parts();
+                assert_eq!(a.info(), b.info(), "{builder:?} leaf {leaf_size}");
+                assert_eq!(a_nodes, b_nodes, "{builder:?} leaf {leaf_size}");
+                assert_eq!(a_refs, b_refs, "{builder:?} leaf {leaf_size}");
+                assert!(a.info().node_count as usize > N / leaf_size as usize);
+            }
+        }
+    }
 }

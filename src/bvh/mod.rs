@@ -73,12 +73,17 @@ pub fn requirements(prim_count: usize, builder: Builder) -> BvhRequirements {
     if builder == Builder::NnChain {
         return build_nn_chain::chain_requirements(n);
     }
+    let top_down = matches!(builder, Builder::Tdbs | Builder::TdbsSah);
     BvhRequirements {
         nodes: (2 * n).saturating_sub(1).max(1),
         refs: n,
         boxes: n,
         keys: n,
-        links: n,
+        links: if top_down {
+            build_tdbs::links_needed(n).max(1)
+        } else {
+            n
+        },
         clusters: if builder == Builder::Nn { n } else { 0 },
     }
 }
