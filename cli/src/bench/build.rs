@@ -72,11 +72,13 @@ fn tdbs_sah(scene: &Scene) -> Result<BuildCell, String> {
     o.build(scene).map_err(|e| format!("tdbs-sah: {e}"))?;
     let ms = t.elapsed().as_secs_f64() * 1e3;
     let n = scene.prim_count().max(1) as f64;
+    let req = coray::bvh::requirements(scene.prim_count(), coray::bvh::Builder::TdbsSah);
+    let scratch = coray::bvh::layout::BvhScratchLayout::of(&req).map_or(0, |l| l.total_bytes);
     Ok(BuildCell {
         builder: "tdbs-sah".into(),
         ms,
         bytes_per_prim: o.bytes() as f64 / n,
-        scratch_per_prim: 0.0,
+        scratch_per_prim: scratch as f64 / n,
         truncated: false,
     })
 }
