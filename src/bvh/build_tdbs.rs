@@ -102,24 +102,14 @@ pub(crate) fn build<'a>(
         // (criterion, axis, left count): smaller criterion is better.
         let mut best: Option<(f64, usize, usize)> = None;
         for (axis, o) in order.iter().enumerate() {
-            let run = &o[first..first + count];
-            let mut acc = Aabb::EMPTY;
-            for k in (1..count).rev() {
-                acc = acc.union(&boxes[run[k] as usize]);
-                suffix[k] = area(&acc) as f32;
-            }
-            let mut left = Aabb::EMPTY;
-            for k in 1..count {
-                left = left.union(&boxes[run[k - 1] as usize]);
-                let (al, ar) = (area(&left), suffix[k] as f64);
-                let c = match builder {
-                    Builder::Tdbs => (al - ar).abs(),
-                    _ => al * k as f64 + ar * (count - k) as f64,
-                };
-                if best.is_none_or(|b| c.partial_cmp(&b.0) == Some(Ordering::Less)) {
-                    best = Some((c, axis, k));
-                }
-            }
+            sweep(
+                &o[first..first + count],
+                boxes,
+                suffix,
+                builder,
+                axis,
+                &mut best,
+            );
         }
         let (_, axis, k) = best.expect("count >= 2");
         let run = &order[axis][first..first + count];
@@ -149,6 +139,38 @@ pub(crate) fn build<'a>(
         i += 1;
     }
     Ok(binary(scene, nodes, refs, top, n, depth))
+}
+
+/// The builder's criterion at every linear partition of `run` (sorted by
+/// centre on `axis`), kept in `best` as (criterion, axis, left count) when
+/// smaller (ties keep the earlier axis and count); `suffix` holds the
+/// right sides' areas meanwhile.
+fn sweep(
+    run: &[u32],
+    boxes: &[Aabb],
+    suffix: &mut [f32],
+    builder: Builder,
+    axis: usize,
+    best: &mut Option<(f64, usize, usize)>,
+) {
+    let count = run.len();
+    let mut acc = Aabb::EMPTY;
+    for k in (1..count).rev() {
+        acc = acc.union(&boxes[run[k] as usize]);
+        suffix[k] = area(&acc) as f32;
+    }
+    let mut left = Aabb::EMPTY;
+    for k in 1..count {
+        left = left.union(&boxes[run[k - 1] as usize]);
+        let (al, ar) = (area(&left), suffix[k] as f64);
+        let c = match builder {
+            Builder::Tdbs => (al - ar).abs(),
+            _ => al * k as f64 + ar * (count - k) as f64,
+        };
+        if best.is_none_or(|b| c.partial_cmp(&b.0) == Some(Ordering::Less)) {
+            *best = Some((c, axis, k));
+        }
+    }
 }
 
 /// Moves the elements of `run` for which `left` holds to its front and the
@@ -214,8 +236,9 @@ mod tests {
         }
     }
 
-    /// The build as it was: every node sorts its run on each axis. The
-    /// presorted build must give the same hierarchy, node for node.
+    /// The build as it was: every node sorts its run on each axis (the
+    /// same sweep). The presorted build must give the same hierarchy,
+    /// node for node.
     /// Sorts `run` by box centre on `axis` (index breaks ties: the build is
     /// the same on every machine).
     fn sort_run(run: &mut [u32], boxes: &[Aabb], axis: usize) {
@@ -234,12 +257,6 @@ mod tests {
         storage: BvhStorage<'a>,
         scratch: BvhScratch,
     ) -> Result<Bvh<'a>, Error> {
-        if matches!(builder, Builder::Nn | Builder::NnChain) {
-            return Err(Error::InvalidParameter { name: "builder" });
-        }
-        if leaf_size == 0 {
-            return Err(Error::InvalidParameter { name: "leaf_size" });
-        }
         let BvhStorage { nodes, refs } = storage;
         let boxes = &mut scratch.boxes[..];
         let suffix = &mut scratch.keys[..];
@@ -270,23 +287,7 @@ mod tests {
             let mut best: Option<(f64, usize, usize)> = None;
             for axis in 0..3 {
                 sort_run(run, boxes, axis);
-                let mut acc = Aabb::EMPTY;
-                for k in (1..count).rev() {
-                    acc = acc.union(&boxes[run[k] as usize]);
-                    suffix[k] = area(&acc) as f32;
-                }
-                let mut left = Aabb::EMPTY;
-                for k in 1..count {
-                    left = left.union(&boxes[run[k - 1] as usize]);
-                    let (al, ar) = (area(&left), suffix[k] as f64);
-                    let c = match builder {
-                        Builder::Tdbs => (al - ar).abs(),
-                        _ => al * k as f64 + ar * (count - k) as f64,
-                    };
-                    if best.is_none_or(|b| c.partial_cmp(&b.0) == Some(Ordering::Less)) {
-                        best = Some((c, axis, k));
-                    }
-                }
+                sweep(run, boxes, suffix, builder, axis, &mut best);
             }
             let (_, axis, k) = best.expect("count >= 2");
             if axis != 2 {
