@@ -25,25 +25,32 @@ fn area(b: &Aabb) -> f64 {
     2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
 }
 
-/// Sweep order on `axis` as one integer: box centre (as `f32::total_cmp`
-/// orders it), then primitive index (so the build is the same on every
-/// machine).
+/// The box centre on `axis` as a `u32` that orders as `f32::total_cmp`
+/// orders the centres.
 #[inline(always)]
-fn centre_key(boxes: &[Aabb], axis: usize, prim: u32) -> u64 {
-    let bits = centre(&boxes[prim as usize], axis).to_bits();
-    let ordered = if bits >> 31 == 1 {
+fn ordered_centre(b: &Aabb, axis: usize) -> u32 {
+    let bits = centre(b, axis).to_bits();
+    if bits >> 31 == 1 {
         !bits
     } else {
         bits | 1 << 31
-    };
-    (ordered as u64) << 32 | prim as u64
+    }
+}
+
+/// Sweep order as one integer: the ordered centre (from `ordered_centre`,
+/// cached per primitive), then the primitive index (so the build is the
+/// same on every machine).
+#[inline(always)]
+fn centre_key(ordered: &[u32], prim: u32) -> u64 {
+    (ordered[prim as usize] as u64) << 32 | prim as u64
 }
 
 /// `links` a TDBS build needs for `n` primitives: a depth per pair of
-/// siblings, the references in centre order on each axis, and one run's
-/// right side while it is partitioned.
+/// siblings, the references in centre order on each axis, one run's right
+/// side while it is partitioned, and each primitive's ordered centre on
+/// each axis.
 pub(crate) fn links_needed(n: usize) -> usize {
-    n.saturating_mul(5)
+    n.saturating_mul(8)
 }
 
 pub(crate) fn build<'a>(
@@ -81,11 +88,21 @@ pub(crate) fn build<'a>(
     let (by_x, rest) = rest.split_at_mut(n);
     let (by_y, rest) = rest.split_at_mut(n);
     let (by_z, rest) = rest.split_at_mut(n);
-    let right_side = &mut rest[..n];
+    let (right_side, rest) = rest.split_at_mut(n);
+    let prims = scene.prim_count();
+    let (cx, rest) = rest.split_at_mut(prims);
+    let (cy, rest) = rest.split_at_mut(prims);
+    let cz = &mut rest[..prims];
+    let mut centres = [cx, cy, cz];
+    for (axis, c) in centres.iter_mut().enumerate() {
+        for &p in &refs[..n] {
+            c[p as usize] = ordered_centre(&boxes[p as usize], axis);
+        }
+    }
     let mut order = [by_x, by_y, by_z];
-    for (axis, o) in order.iter_mut().enumerate() {
+    for (o, c) in order.iter_mut().zip(&centres) {
         o.copy_from_slice(&refs[..n]);
-        o.sort_unstable_by_key(|&p| centre_key(boxes, axis, p));
+        o.sort_unstable_by_key(|&p| centre_key(c, p));
     }
     let pair = |i: usize| i.div_ceil(2);
     level[0] = 0;
@@ -116,7 +133,7 @@ pub(crate) fn build<'a>(
         // The run as the split axis orders it: the references a child
         // keeps if it stays a leaf.
         refs[first..first + count].copy_from_slice(run);
-        let pivot = centre_key(boxes, axis, run[k]);
+        let pivot = centre_key(centres[axis], run[k]);
         let (mut bl, mut br) = (Aabb::EMPTY, Aabb::EMPTY);
         for &p in &run[..k] {
             bl = bl.union(&boxes[p as usize]);
@@ -127,7 +144,7 @@ pub(crate) fn build<'a>(
         for (b, o) in order.iter_mut().enumerate() {
             if b != axis {
                 partition(&mut o[first..first + count], right_side, |p| {
-                    centre_key(boxes, axis, p) < pivot
+                    centre_key(centres[axis], p) < pivot
                 });
             }
         }
@@ -220,6 +237,7 @@ mod tests {
             };
         }
         for axis in 0..3 {
+            let ordered = boxes.map(|b| ordered_centre(&b, axis));
             for a in 0..30u32 {
                 for b in 0..30u32 {
                     let (ca, cb) = (
@@ -227,7 +245,7 @@ mod tests {
                         centre(&boxes[b as usize], axis),
                     );
                     assert_eq!(
-                        centre_key(&boxes, axis, a).cmp(&centre_key(&boxes, axis, b)),
+                        centre_key(&ordered, a).cmp(&centre_key(&ordered, b)),
                         ca.total_cmp(&cb).then(a.cmp(&b)),
                         "{ca} {cb}"
                     );
@@ -236,9 +254,6 @@ mod tests {
         }
     }
 
-    /// The build as it was: every node sorts its run on each axis (the
-    /// same sweep). The presorted build must give the same hierarchy,
-    /// node for node.
     /// Sorts `run` by box centre on `axis` (index breaks ties: the build is
     /// the same on every machine).
     fn sort_run(run: &mut [u32], boxes: &[Aabb], axis: usize) {
@@ -249,6 +264,9 @@ mod tests {
         });
     }
 
+    /// The build as it was: every node sorts its run on each axis (the
+    /// same sweep). The presorted build must give the same hierarchy,
+    /// node for node.
     fn build_sorting_each_run<'a>(
         scene: &Scene<'a>,
         source: Option<&[Aabb]>,
@@ -349,7 +367,7 @@ mod tests {
                 let mut refs = [[0u32; N]; 2];
                 let mut boxes = [Aabb::EMPTY; N];
                 let mut keys = [0.0f32; N];
-                let mut links = [0u32; 5 * N];
+                let mut links = [0u32; 8 * N];
                 let [na, nb] = &mut nodes;
                 let [ra, rb] = &mut refs;
                 let a = build(
