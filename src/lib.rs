@@ -36,6 +36,7 @@ pub mod oracle;
 pub mod owned;
 pub mod proj;
 pub mod rng;
+mod sort_key;
 pub mod stats;
 pub mod tolerance;
 

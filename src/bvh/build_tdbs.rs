@@ -29,12 +29,7 @@ fn area(b: &Aabb) -> f64 {
 /// orders the centres.
 #[inline(always)]
 fn ordered_centre(b: &Aabb, axis: usize) -> u32 {
-    let bits = centre(b, axis).to_bits();
-    if bits >> 31 == 1 {
-        !bits
-    } else {
-        bits | 1 << 31
-    }
+    crate::sort_key::ordered_bits(centre(b, axis))
 }
 
 /// Sweep order as one integer: the ordered centre (from `ordered_centre`,

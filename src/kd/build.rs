@@ -49,18 +49,13 @@ impl KdEvent {
         self.word & 3
     }
     /// Sweep order as one integer: position, then end < planar < start,
-    /// then primitive (which makes the build deterministic). The position's
-    /// bits are mapped so that integers order as the floats do (events
-    /// hold no -0.0, see [`KdEvent::new`]); primitives fit in 30 bits.
+    /// then primitive (which makes the build deterministic). Events hold
+    /// no -0.0 (see [`KdEvent::new`]), so the ordered bits order as the
+    /// positions compare; primitives fit in 30 bits.
     #[inline(always)]
     fn key(&self) -> u64 {
-        let bits = self.pos.to_bits();
-        let ordered = if bits >> 31 == 1 {
-            !bits
-        } else {
-            bits | 1 << 31
-        };
-        (ordered as u64) << 32 | ((self.word & 3) << 30 | self.word >> 2) as u64
+        let pos = crate::sort_key::ordered_bits(self.pos);
+        (pos as u64) << 32 | ((self.word & 3) << 30 | self.word >> 2) as u64
     }
 }
 
