@@ -107,15 +107,35 @@ impl F8 {
     }
 }
 
-/// The correctly rounded square root of `x`, as `sqrtss` and IEEE 754
-/// give it (so bit for bit what `libm::sqrtf` returns), computed with
+/// The correctly rounded square root of `x`, as IEEE 754 gives it (so
+/// bit for bit what the scalar code's `libm::sqrtf` returns): on x86 that
+/// function itself, one `sqrtss` instruction; elsewhere [`sqrt_newton`]
+/// (libm's portable square root loops over the bits).
+///
+/// Measured (`coray bench spd:lattice --methods kd-packet`, AMD EPYC):
+/// `sqrtss` doubled the packets' shadow rays over the Newton iteration,
+/// whose twenty dependent f64 operations per root were most of a cone
+/// test; the legacy SSE encoding costs nothing measurable there.
+#[inline(always)]
+pub fn sqrt_rn(x: f32) -> f32 {
+    #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
+    {
+        libm::sqrtf(x)
+    }
+    #[cfg(not(any(target_arch = "x86", target_arch = "x86_64")))]
+    {
+        sqrt_newton(x)
+    }
+}
+
+/// The correctly rounded square root of `x` (as [`sqrt_rn`]), computed with
 /// multiplies only: a reciprocal square root refined by Newton's method
 /// in f64, then the f32 result chosen by exact comparisons at the
 /// midpoints of its neighbours (a 25-bit midpoint squares exactly in f64,
-/// and never equals a float). Plain arithmetic the compiler vectorises,
-/// unlike libm's `sqrtss` asm, whose legacy SSE encoding stalls AVX code.
+/// and never equals a float). Plain arithmetic, for targets without a
+/// square root instruction that libm would use.
 #[inline(always)]
-pub fn sqrt_rn(x: f32) -> f32 {
+pub fn sqrt_newton(x: f32) -> f32 {
     let xd = x as f64;
     // 1/sqrt(x) to about 3.5%, then four Newton steps: below 1e-20.
     let mut r = f64::from_bits(0x5fe6_eb50_c7b5_37a9u64.wrapping_sub(xd.to_bits() >> 1));
@@ -210,11 +230,13 @@ mod tests {
     #[test]
     fn sqrt_is_correctly_rounded() {
         let check = |x: f32| {
-            let (a, b) = (sqrt_rn(x), libm::sqrtf(x));
-            assert!(
-                a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()),
-                "{x:e}: {a:e} vs {b:e}"
-            );
+            let b = libm::sqrtf(x);
+            for a in [sqrt_rn(x), sqrt_newton(x)] {
+                assert!(
+                    a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()),
+                    "{x:e}: {a:e} vs {b:e}"
+                );
+            }
         };
         for x in [
             0.0,
