@@ -146,6 +146,35 @@ fn packets_with_odd_lanes() {
     same_as_hierarchical(&t, &rays, "odd lanes");
 }
 
+/// Packets whose rays agree on every direction sign but lead on different
+/// axes (x for some lanes, y for others): the watertight test orders its
+/// axes by the leading one, so those lanes test triangles alone inside
+/// the packet; every answer as the single ray's.
+#[test]
+fn packets_whose_lanes_lead_on_different_axes() {
+    let mut rng = Rng(10);
+    let o = random_scene(&mut rng, 4000, 100, 100, 3.0);
+    let sc = o.scene();
+    let kd = coray::owned::OwnedKd::new(&sc, &KdParams::auto()).unwrap();
+    let t = kd.tree(sc).unwrap();
+    let mut rays = Vec::new();
+    for _ in 0..400 {
+        let aim = rng.vec(-2.0, 2.0);
+        let sign = |rng: &mut Rng| if rng.f() < 0.5 { 1.0 } else { -1.0 };
+        let (sx, sz) = (sign(&mut rng), sign(&mut rng));
+        for i in 0..PACKET_LANES {
+            // |y| from 0.95 to 1.09 against |x| = 1: lanes 0-2 lead on
+            // x, lanes 3-7 on y.
+            let d = Vec3::new(sx, 0.95 + 0.02 * i as f32, sz * (0.2 + 0.01 * i as f32));
+            rays.push(Ray::new(aim - d * 8.0, d, 0.0, f32::INFINITY));
+        }
+    }
+    let (hits, groups) = same_as_hierarchical(&t, &rays, "mixed leading axes");
+    assert!(groups == 400 && hits > rays.len() / 4, "{hits} {groups}");
+    let sh = shadows(&t, &rays, Vec3::new(2.0, 9.0, 3.0));
+    same_as_hierarchical(&t, &sh, "mixed leading axes, shadows");
+}
+
 proptest::proptest! {
     #![proptest_config(proptest::prelude::ProptestConfig::with_cases(24))]
 

@@ -4,9 +4,12 @@
 //! them at once, on the lane arrays of [`crate::geom::lanes`].
 //!
 //! The rays of a packet must agree on the sign of each direction
-//! component and on the watertight test's axis order (true of a tile of
-//! camera rays, or of shadow rays from a tile towards one light); other
-//! groups are traced ray by ray. Every ray gets exactly the hit of
+//! component (true of a tile of camera rays, or of shadow rays from a
+//! tile towards one light); other groups are traced ray by ray. Lanes
+//! whose watertight test would order the axes unlike the packet's first
+//! ray (its dominant axis differs) stay in the packet for traversal and
+//! take their triangle tests alone, as the single ray does. Every ray
+//! gets exactly the hit of
 //! [`Traversal::Hierarchical`](super::Traversal::Hierarchical): each lane
 //! takes the same decisions at the nodes it needs, tests the primitives
 //! of a superset of the same leaves with the same arithmetic, keeps its
@@ -59,6 +62,14 @@ pub(crate) struct Packet {
     sz: F8,
     t_min: F8,
     t_max: F8,
+    /// Each direction's length and the unit direction (what the sphere
+    /// and cone tests normalise by), once per packet; set only when the
+    /// scene has spheres or cones.
+    dir_len: F8,
+    unit: [F8; 3],
+    /// Valid lanes whose watertight axes differ from `k` (their dominant
+    /// direction component is another): their triangle tests run alone.
+    odd_k: M8,
     /// Whether the rays move towards +axis, per axis (shared).
     up: [bool; 3],
     /// The watertight test's axes (shared).
@@ -76,16 +87,20 @@ impl Packet {
         sz: F8::splat(0.0),
         t_min: F8::splat(0.0),
         t_max: F8::splat(0.0),
+        dir_len: F8::splat(1.0),
+        unit: [F8::splat(1.0); 3],
+        odd_k: M8::NONE,
         up: [true; 3],
         k: [0, 1, 2],
     };
 
-    /// Loads `rays` (at most 8; missing and invalid lanes are off). False
-    /// when they do not move alike: a direction component of zero or too
-    /// small to invert, signs or the test's axes that differ (the packet
-    /// is then unusable).
+    /// Loads `rays` (at most 8; missing and invalid lanes are off), with
+    /// the unit directions when the scene is `curved` (has spheres or
+    /// cones). False when they do not move alike: a direction component
+    /// of zero or too small to invert, or signs that differ (the packet is
+    /// then unusable).
     #[inline(always)]
-    pub(crate) fn load(&mut self, rays: &[Ray]) -> bool {
+    pub(crate) fn load(&mut self, rays: &[Ray], curved: bool) -> bool {
         let Some(first) = rays.iter().find(|r| r.is_valid()) else {
             return false;
         };
@@ -123,10 +138,19 @@ impl Packet {
         let is_x = ax.ge(ay) & ax.ge(az);
         let is_y = !is_x & ay.ge(az);
         let is_z = !is_x & !is_y;
-        alike = alike & [is_x, is_y, is_z][kz];
+        self.odd_k = !([is_x, is_y, is_z][kz]);
         self.sx = self.d[kx] / self.d[kz];
         self.sy = self.d[ky] / self.d[kz];
         self.sz = one / self.d[kz];
+        if curved {
+            let d = self.d;
+            self.dir_len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            self.unit = [
+                d[0] / self.dir_len,
+                d[1] / self.dir_len,
+                d[2] / self.dir_len,
+            ];
+        }
         alike.count() == LANES as u32
     }
 
@@ -134,6 +158,11 @@ impl Packet {
     /// decides alone: spheres, cones, triangle edges).
     #[inline(always)]
     fn ray(&self, i: usize) -> PreparedRay {
+        if self.odd_k.get(i) {
+            let o = Vec3::new(self.o[0].0[i], self.o[1].0[i], self.o[2].0[i]);
+            let d = Vec3::new(self.d[0].0[i], self.d[1].0[i], self.d[2].0[i]);
+            return PreparedRay::new(&Ray::new(o, d, self.t_min.0[i], self.t_max.0[i]));
+        }
         PreparedRay {
             origin: Vec3::new(self.o[0].0[i], self.o[1].0[i], self.o[2].0[i]),
             dir: Vec3::new(self.d[0].0[i], self.d[1].0[i], self.d[2].0[i]),
@@ -206,8 +235,9 @@ pub(crate) struct AnyLanes {
 /// Woop's watertight test of one triangle against eight rays, lane by
 /// lane the arithmetic of [`intersect_triangle`], for the lanes `on`.
 /// Returns the lanes hit in `[t_min, t_max]` with their (t, u, v), and
-/// the lanes the single test would settle in double precision (a
-/// barycentric of exactly 0), which the caller tests alone.
+/// the lanes the caller tests alone: those the single test would settle
+/// in double precision (a barycentric of exactly 0), and those whose
+/// watertight axes are not the packet's.
 #[inline(always)]
 fn triangle8(p: &Packet, v: [Vec3; 3], on: M8, t_max: F8) -> (M8, M8, F8, F8, F8) {
     let [kx, ky, kz] = p.k;
@@ -239,7 +269,14 @@ fn triangle8(p: &Packet, v: [Vec3; 3], on: M8, t_max: F8) -> (M8, M8, F8, F8, F8
     let t = (u * (p.sz * a_z) + vv * (p.sz * b_z) + w * (p.sz * c_z)) * inv_det;
     // det not 0 nor NaN (ne is true for NaN: eq excludes it); t in range.
     let ok = !mixed & det.ne(zero) & det.eq(det) & t.ge(p.t_min) & t.le(t_max);
-    (on & !edge & ok, on & edge, t, vv * inv_det, w * inv_det)
+    let (shared, odd) = (on & !p.odd_k, on & p.odd_k);
+    (
+        shared & !edge & ok,
+        (shared & edge) | odd,
+        t,
+        vv * inv_det,
+        w * inv_det,
+    )
 }
 
 /// The lanes of `on` whose segments may pass within `radius` of `center`
@@ -321,15 +358,14 @@ fn sphere8(p: &Packet, sp: &crate::Sphere, on: M8, t_max: F8) -> (M8, F8) {
     }
     let inv_r = F8::splat(1.0 / sp.radius);
     let dot = |a: [F8; 3], b: [F8; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    let dir_len = dot(p.d, p.d).sqrt();
-    let to_t = F8::splat(sp.radius) / dir_len;
+    let to_t = F8::splat(sp.radius) / p.dir_len;
     let c = sp.center;
     let oc = [
         (p.o[0] - F8::splat(c[0])) * inv_r,
         (p.o[1] - F8::splat(c[1])) * inv_r,
         (p.o[2] - F8::splat(c[2])) * inv_r,
     ];
-    let d = [p.d[0] / dir_len, p.d[1] / dir_len, p.d[2] / dir_len];
+    let d = p.unit;
     let uc = F8::splat(0.0) - dot(oc, d);
     let h = [oc[0] + d[0] * uc, oc[1] + d[1] * uc, oc[2] + d[2] * uc];
     let disc = F8::splat(1.0) - dot(h, h);
@@ -375,8 +411,7 @@ fn cone8(p: &Packet, cone: &crate::Cone, on: M8, t_max: F8) -> (M8, F8, F8, [F8;
     }
     let s8 = F8::splat;
     let dot = |a: [F8; 3], b: [F8; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    let dir_len = dot(p.d, p.d).sqrt();
-    let d = [p.d[0] / dir_len, p.d[1] / dir_len, p.d[2] / dir_len];
+    let (dir_len, d) = (p.dir_len, p.unit);
     let co = [
         s8(center.x) - p.o[0],
         s8(center.y) - p.o[1],
@@ -863,8 +898,9 @@ impl KdTree<'_> {
     ) {
         assert!(out.len() >= rays.len() && stack.len() >= KD_STACK_LEN);
         let mut p = Packet::EMPTY;
+        let curved = !(self.scene.spheres.is_empty() && self.scene.cones.is_empty());
         for (rs, os) in rays.chunks(LANES).zip(out.chunks_mut(LANES)) {
-            if p.load(rs) {
+            if p.load(rs, curved) {
                 let mut v = V::new(&p);
                 let mut steps = Steps::default();
                 self.walk_packet(&p, &mut v, stack, &mut steps);
