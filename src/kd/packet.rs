@@ -232,6 +232,20 @@ pub(crate) struct AnyLanes {
     pub tests: u64,
 }
 
+/// Vertex `q` relative to the lanes' origins `o`, both in the watertight
+/// test's axis order `k`. A function, not a closure: a closure is compiled
+/// apart from the AVX2 kernels that call it (without their features) and
+/// was not inlined (a call with SSE2 code, a quarter of a shadow packet's
+/// instructions on spd:tetra).
+#[inline(always)]
+fn relative(q: Vec3, k: [usize; 3], o: &[F8; 3]) -> [F8; 3] {
+    [
+        F8::splat(q[k[0]]) - o[0],
+        F8::splat(q[k[1]]) - o[1],
+        F8::splat(q[k[2]]) - o[2],
+    ]
+}
+
 /// Woop's watertight test of one triangle against eight rays, lane by
 /// lane the arithmetic of [`intersect_triangle`], for the lanes `on`.
 /// Returns the lanes hit in `[t_min, t_max]` with their (t, u, v), and
@@ -241,17 +255,10 @@ pub(crate) struct AnyLanes {
 #[inline(always)]
 fn triangle8(p: &Packet, v: [Vec3; 3], on: M8, t_max: F8) -> (M8, M8, F8, F8, F8) {
     let [kx, ky, kz] = p.k;
-    let (ox, oy, oz) = (p.o[kx], p.o[ky], p.o[kz]);
-    let rel = |q: Vec3| {
-        (
-            F8::splat(q[kx]) - ox,
-            F8::splat(q[ky]) - oy,
-            F8::splat(q[kz]) - oz,
-        )
-    };
-    let (a_x, a_y, a_z) = rel(v[0]);
-    let (b_x, b_y, b_z) = rel(v[1]);
-    let (c_x, c_y, c_z) = rel(v[2]);
+    let o = [p.o[kx], p.o[ky], p.o[kz]];
+    let [a_x, a_y, a_z] = relative(v[0], p.k, &o);
+    let [b_x, b_y, b_z] = relative(v[1], p.k, &o);
+    let [c_x, c_y, c_z] = relative(v[2], p.k, &o);
     let ax = a_x - p.sx * a_z;
     let ay = a_y - p.sy * a_z;
     let bx = b_x - p.sx * b_z;
