@@ -288,7 +288,8 @@ pub(crate) fn check_storage(
 /// Boxes of the scene's non-degenerate primitives into `boxes`, their
 /// indices into `refs`; returns how many (degenerate ones are never hit
 /// and stay out of the hierarchy). With `source`, its boxes stand in for
-/// the primitives' (an empty one leaves the primitive out).
+/// the primitives' (an empty one leaves the primitive out). No box it
+/// keeps is empty.
 pub(crate) fn gather(
     scene: &Scene,
     source: Option<&[Aabb]>,
@@ -311,10 +312,12 @@ pub(crate) fn gather(
     }
     let mut n = 0;
     for (p, slot) in boxes.iter_mut().enumerate().take(scene.prim_count()) {
+        // Never an empty box (the TDBS sweep's areas rely on it).
         let b = match source {
-            Some(src) => Some(src[p]).filter(|b| !b.is_empty()),
+            Some(src) => Some(src[p]),
             None => scene.prim_bounds(p),
-        };
+        }
+        .filter(|b| !b.is_empty());
         if let Some(b) = b {
             *slot = b;
             refs[n] = p as u32;
