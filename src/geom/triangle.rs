@@ -5,7 +5,7 @@ use glam::Vec3;
 /// slips between two triangles that share an edge. Both sides are hit.
 /// Returns `(t, u, v)` with `u`, `v` the weights of `v1` and `v2`, for `t`
 /// in `[ray.t_min, t_max]`. A zero-area or NaN triangle is never hit.
-#[inline]
+#[inline(always)]
 pub fn intersect_triangle(
     r: &PreparedRay,
     v0: Vec3,
