@@ -47,7 +47,19 @@ impl OwnedKd {
 
     /// Builds into this room; the scratch is freed afterwards.
     pub fn build(&mut self, scene: &Scene, params: &KdParams) -> Result<(), Error> {
-        let t = kd::build(
+        self.build_with_jobs(scene, params, |_| {})
+    }
+
+    /// Builds into this room as [`Self::build`] does, handing the build's
+    /// jobs to `run_jobs` (which may run them on other threads: see
+    /// [`kd::build_begin`]); jobs it leaves run on this thread.
+    pub fn build_with_jobs(
+        &mut self,
+        scene: &Scene,
+        params: &KdParams,
+        run_jobs: impl FnOnce(kd::KdJobs<'_>),
+    ) -> Result<(), Error> {
+        let mut b = kd::build_begin(
             scene,
             params,
             kd::KdStorage {
@@ -61,7 +73,8 @@ impl OwnedKd {
                 prim_flags: &mut self.flags,
             },
         )?;
-        self.info = *t.info();
+        run_jobs(b.jobs());
+        self.info = *b.finish()?.info();
         self.events = Vec::new();
         self.flags = Vec::new();
         Ok(())

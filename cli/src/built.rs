@@ -46,7 +46,8 @@ pub trait Visit {
 
 impl<'s> Built<'s> {
     /// Builds `method` over `mesh`'s scene; `preset` is the command's, for
-    /// kd methods that name none; `threads` is Embree's build threads.
+    /// kd methods that name none; `threads` build a kd-tree (its jobs) and
+    /// Embree's.
     pub fn new(
         method: Method,
         mesh: &'s SceneMesh,
@@ -78,7 +79,10 @@ impl<'s> Built<'s> {
                 let mut o =
                     OwnedKd::with_room(&coray::kd::requirements(scene.prim_count(), &params));
                 let t = Instant::now();
-                o.build(&scene, &params).map_err(err)?;
+                o.build_with_jobs(&scene, &params, |jobs| {
+                    crate::kd_jobs::run(jobs, threads, scene.prim_count())
+                })
+                .map_err(err)?;
                 b.build_ms = ms(t);
                 b.bytes = Some(o.arena_bytes());
                 b.truncated = o.info().truncated();

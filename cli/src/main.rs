@@ -8,6 +8,7 @@ mod budget;
 mod built;
 mod compare;
 mod export;
+mod kd_jobs;
 mod lcts_table;
 mod method;
 mod plot;

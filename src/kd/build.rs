@@ -62,23 +62,23 @@ impl KdEvent {
 /// A node waiting to be built: its events are `events[start..]`, `counts[a]`
 /// of them on axis `a`, in axis order.
 #[derive(Clone, Copy, Debug)]
-struct Task {
-    node: u32,
-    depth: u32,
-    voxel: Aabb,
-    start: usize,
-    counts: [usize; 3],
-    prims: usize,
+pub(super) struct Task {
+    pub(super) node: u32,
+    pub(super) depth: u32,
+    pub(super) voxel: Aabb,
+    pub(super) start: usize,
+    pub(super) counts: [usize; 3],
+    pub(super) prims: usize,
     /// References this subtree may use. The root has the whole `refs`
     /// slice; a split gives each child its own references plus a share of
     /// the spare in proportion to them, so budgets never sum past the
     /// slice and room runs out evenly across the tree, not in whichever
     /// subtree depth-first order reaches first.
-    ref_budget: usize,
+    pub(super) ref_budget: usize,
 }
 
 impl Task {
-    fn total(&self) -> usize {
+    pub(super) fn total(&self) -> usize {
         self.counts[0] + self.counts[1] + self.counts[2]
     }
     fn axis_range(&self, axis: usize) -> (usize, usize) {
@@ -157,26 +157,29 @@ fn with_min(b: &Aabb, axis: usize, v: f32) -> Aabb {
 }
 
 /// Most nodes a tree holds: indices live in 30 bits.
-const MAX_NODES: usize = crate::limits::MAX_PRIMS - 1;
+pub(super) const MAX_NODES: usize = crate::limits::MAX_PRIMS - 1;
 
-struct Builder<'s, 'a> {
-    scene: &'s Scene<'s>,
+pub(super) struct Builder<'s, 'a> {
+    scene: Scene<'a>,
     params: KdParams,
     depth_limit: u32,
-    nodes: &'a mut [KdNode],
+    pub(super) nodes: &'a mut [KdNode],
     leaves: &'a mut [KdLeaf],
     ropes: &'a mut [super::KdRopes],
     refs: &'a mut [u32],
-    events: &'s mut [KdEvent],
+    pub(super) events: &'s mut [KdEvent],
     flags: &'s mut [u8],
+    /// Events at and above this index are not the build's to use (the job
+    /// build parks its jobs' events there).
+    pub(super) event_limit: usize,
     node_cap: usize,
     leaf_cap: usize,
-    node_top: usize,
-    leaf_top: usize,
-    ref_top: usize,
-    pending: usize,
-    depth: u32,
-    truncated: bool,
+    pub(super) node_top: usize,
+    pub(super) leaf_top: usize,
+    pub(super) ref_top: usize,
+    pub(super) pending: usize,
+    pub(super) depth: u32,
+    pub(super) truncated: bool,
     /// References of the leaves made so far plus every pending node: what
     /// the tree needs at least if nothing more is split.
     frontier_refs: usize,
@@ -185,22 +188,17 @@ struct Builder<'s, 'a> {
     fair: bool,
 }
 
-/// Builds an SAH kd-tree over `scene` into `storage`, using `scratch`.
-///
-/// Fails only for bad input (indices out of range, bad parameters) or for
-/// slices shorter than [`min_requirements`]. With less room than
-/// [`super::requirements`] it stops splitting where room runs out, stays
-/// correct, and sets [`KD_FLAG_TRUNCATED`] in the tree's info.
-pub fn build<'a>(
-    scene: &Scene<'a>,
+/// Checks what every build checks first: the scene, the parameters, and
+/// that each slice holds at least [`min_requirements`].
+pub(super) fn check_build(
+    scene: &Scene,
     params: &KdParams,
-    storage: KdStorage<'a>,
-    scratch: KdScratch<'_>,
-) -> Result<KdTree<'a>, Error> {
+    storage: &KdStorage,
+    scratch: &KdScratch,
+) -> Result<(), Error> {
     scene.check()?;
     params.check()?;
-    let n = scene.prim_count();
-    let min = min_requirements(n);
+    let min = min_requirements(scene.prim_count());
     let have = [
         ("nodes", min.nodes, storage.nodes.len()),
         ("leaves", min.leaves, storage.leaves.len()),
@@ -218,34 +216,37 @@ pub fn build<'a>(
             return Err(Error::SliceTooSmall { slice, needed, got });
         }
     }
-    let node_cap = storage
-        .nodes
-        .len()
-        .min(2 * storage.leaves.len() - 1)
-        .min(MAX_NODES);
-    // Below 2^30 - 1: no leaf takes the index of KdNode::FAULT's record.
-    let leaf_cap = storage.leaves.len().min(MAX_NODES / 2);
-    let mut b = Builder {
-        scene,
-        params: *params,
-        depth_limit: params.depth_limit(n),
-        nodes: storage.nodes,
-        leaves: storage.leaves,
-        ropes: storage.ropes,
-        refs: storage.refs,
-        events: scratch.events,
-        flags: scratch.prim_flags,
-        node_cap,
-        leaf_cap,
-        node_top: 1,
-        leaf_top: 0,
-        ref_top: 0,
-        pending: 0,
-        depth: 0,
-        truncated: false,
-        frontier_refs: 0,
-        fair: false,
-    };
+    Ok(())
+}
+
+/// Builds an SAH kd-tree over `scene` into `storage`, using `scratch`, on
+/// the calling thread: [`super::build_begin`], then
+/// [`super::KdBuild::finish`] running every job.
+///
+/// Fails only for bad input (indices out of range, bad parameters) or for
+/// slices shorter than [`min_requirements`]. With less room than
+/// [`super::requirements`] it stops splitting where room runs out, stays
+/// correct, and sets [`KD_FLAG_TRUNCATED`] in the tree's info.
+pub fn build<'a>(
+    scene: &Scene<'a>,
+    params: &KdParams,
+    storage: KdStorage<'a>,
+    scratch: KdScratch<'_>,
+) -> Result<KdTree<'a>, Error> {
+    super::build_begin(scene, params, storage, scratch)?.finish()
+}
+
+/// The same tree as [`build`], built depth first in one pass over the whole
+/// arena: what the job build falls back to when a job runs out of its
+/// share of the room, and the reference the tests hold it to.
+pub fn build_depth_first<'a>(
+    scene: &Scene<'a>,
+    params: &KdParams,
+    storage: KdStorage<'a>,
+    scratch: KdScratch<'_>,
+) -> Result<KdTree<'a>, Error> {
+    check_build(scene, params, &storage, &scratch)?;
+    let mut b = Builder::new(*scene, params, storage, scratch.events, scratch.prim_flags);
     // Greedy first: the best tree whenever the room suffices. When it ran
     // out, the greedy tree has spent the room on whatever subtrees depth
     // first order reached first; build again sharing it fairly.
@@ -256,40 +257,137 @@ pub fn build<'a>(
         root = b.root_task();
         b.run(root);
     }
-    let bounds = root.voxel;
-    ropes::build_ropes(&b.nodes[..b.node_top], &mut b.ropes[..b.leaf_top], &bounds);
-    let info = KdInfo {
-        magic: KD_MAGIC,
-        version: KD_VERSION,
-        triangle_count: scene.triangles.len() as u32,
-        sphere_count: scene.spheres.len() as u32,
-        cone_count: scene.cones.len() as u32,
-        valid_prim_count: root.prims as u32,
-        node_count: b.node_top as u32,
-        leaf_count: b.leaf_top as u32,
-        ref_count: b.ref_top as u32,
+    let made = Made {
+        node_count: b.node_top,
+        leaf_count: b.leaf_top,
+        ref_count: b.ref_top,
         depth: b.depth,
-        flags: if b.truncated { KD_FLAG_TRUNCATED } else { 0 },
-        bounds_min: bounds.min.into(),
-        bounds_max: bounds.max.into(),
-        ref_digest: {
-            let d = crate::rng::ref_digest(b.refs[..b.ref_top].iter().copied());
-            [d as u32, (d >> 32) as u32]
-        },
+        truncated: b.truncated,
+        bounds: root.voxel,
+        prims: root.prims,
     };
-    let (node_top, leaf_top, ref_top) = (b.node_top, b.leaf_top, b.ref_top);
-    let (nodes, leaves, ropes, refs) = (b.nodes, b.leaves, b.ropes, b.refs);
-    Ok(KdTree {
-        scene: *scene,
-        info,
-        nodes: &nodes[..node_top],
-        leaves: &leaves[..leaf_top],
-        ropes: &ropes[..leaf_top],
-        refs: &refs[..ref_top],
-    })
+    let storage = b.into_storage();
+    Ok(made.into_tree(scene, storage))
+}
+
+/// What a build laid out at the start of its storage, before the ropes.
+pub(super) struct Made {
+    pub(super) node_count: usize,
+    pub(super) leaf_count: usize,
+    pub(super) ref_count: usize,
+    pub(super) depth: u32,
+    pub(super) truncated: bool,
+    /// The root's box.
+    pub(super) bounds: Aabb,
+    /// Primitives that are not degenerate.
+    pub(super) prims: usize,
+}
+
+impl Made {
+    /// Ropes, info and the tree over the first counts of `storage`.
+    pub(super) fn into_tree<'a>(self, scene: &Scene<'a>, storage: KdStorage<'a>) -> KdTree<'a> {
+        let KdStorage {
+            nodes,
+            leaves,
+            ropes,
+            refs,
+        } = storage;
+        let (nodes, leaves) = (&nodes[..self.node_count], &leaves[..self.leaf_count]);
+        let (ropes, refs) = (&mut ropes[..self.leaf_count], &refs[..self.ref_count]);
+        ropes::build_ropes(nodes, ropes, &self.bounds);
+        let info = KdInfo {
+            magic: KD_MAGIC,
+            version: KD_VERSION,
+            triangle_count: scene.triangles.len() as u32,
+            sphere_count: scene.spheres.len() as u32,
+            cone_count: scene.cones.len() as u32,
+            valid_prim_count: self.prims as u32,
+            node_count: self.node_count as u32,
+            leaf_count: self.leaf_count as u32,
+            ref_count: self.ref_count as u32,
+            depth: self.depth,
+            flags: if self.truncated { KD_FLAG_TRUNCATED } else { 0 },
+            bounds_min: self.bounds.min.into(),
+            bounds_max: self.bounds.max.into(),
+            ref_digest: {
+                let d = crate::rng::ref_digest(refs.iter().copied());
+                [d as u32, (d >> 32) as u32]
+            },
+        };
+        KdTree {
+            scene: *scene,
+            info,
+            nodes,
+            leaves,
+            ropes,
+            refs,
+        }
+    }
 }
 
 impl<'s, 'a> Builder<'s, 'a> {
+    /// A greedy builder over these slices, its capacities theirs, nothing
+    /// made yet (node 0 is the root's slot).
+    pub(super) fn new(
+        scene: Scene<'a>,
+        params: &KdParams,
+        storage: KdStorage<'a>,
+        events: &'s mut [KdEvent],
+        flags: &'s mut [u8],
+    ) -> Builder<'s, 'a> {
+        let node_cap = storage
+            .nodes
+            .len()
+            .min((2 * storage.leaves.len()).saturating_sub(1))
+            .min(MAX_NODES);
+        // Below 2^30 - 1: no leaf takes the index of KdNode::FAULT's record.
+        let leaf_cap = storage.leaves.len().min(MAX_NODES / 2);
+        Builder {
+            scene,
+            params: *params,
+            depth_limit: params.depth_limit(scene.prim_count()),
+            nodes: storage.nodes,
+            leaves: storage.leaves,
+            ropes: storage.ropes,
+            refs: storage.refs,
+            event_limit: events.len(),
+            events,
+            flags,
+            node_cap,
+            leaf_cap,
+            node_top: 1,
+            leaf_top: 0,
+            ref_top: 0,
+            pending: 0,
+            depth: 0,
+            truncated: false,
+            frontier_refs: 0,
+            fair: false,
+        }
+    }
+
+    /// Makes this builder one job of a job build: it starts with `prims`
+    /// references pending, as [`Self::root_task`] starts the whole scene.
+    pub(super) fn as_job(&mut self, prims: usize) {
+        self.frontier_refs = prims;
+    }
+
+    /// The storage the builder was given back.
+    pub(super) fn into_storage(self) -> KdStorage<'a> {
+        self.into_parts().0
+    }
+
+    /// The storage, the events and the flags the builder was given back.
+    pub(super) fn into_parts(self) -> (KdStorage<'a>, &'s mut [KdEvent], &'s mut [u8]) {
+        let storage = KdStorage {
+            nodes: self.nodes,
+            leaves: self.leaves,
+            ropes: self.ropes,
+            refs: self.refs,
+        };
+        (storage, self.events, self.flags)
+    }
+
     fn restart_fair(&mut self) {
         self.node_top = 1;
         self.leaf_top = 0;
@@ -301,7 +399,7 @@ impl<'s, 'a> Builder<'s, 'a> {
     }
 
     /// Events of every non-degenerate primitive, sorted once per axis.
-    fn root_task(&mut self) -> Task {
+    pub(super) fn root_task(&mut self) -> Task {
         let n = self.scene.prim_count();
         let mut voxel = Aabb::EMPTY;
         let mut valid = 0;
@@ -338,7 +436,7 @@ impl<'s, 'a> Builder<'s, 'a> {
     /// Depth-first: split the current node while it pays, keep right
     /// children on a stack bounded by the depth limit. What a leaf leaves of
     /// its reference budget passes to the next node built.
-    fn run(&mut self, root: Task) {
+    pub(super) fn run(&mut self, root: Task) {
         let mut stack = [root; KD_MAX_DEPTH as usize + 1];
         let mut task = root;
         loop {
@@ -497,7 +595,7 @@ impl<'s, 'a> Builder<'s, 'a> {
 
     /// Splits `task` when the termination rule and the room allow; returns
     /// the (left, right) children with their events in place.
-    fn try_split(&mut self, task: &Task) -> Option<(Task, Task)> {
+    pub(super) fn try_split(&mut self, task: &Task) -> Option<(Task, Task)> {
         let n = task.prims;
         if n <= self.params.leaf_size as usize || task.depth >= self.depth_limit {
             return None;
@@ -550,7 +648,7 @@ impl<'s, 'a> Builder<'s, 'a> {
         // room for the most the left side can have (right): at most six
         // old events per primitive on one side, plus its new ones. No pass
         // counts them first.
-        if dest + 6 * (left_only + right_only) + 12 * straddling > self.events.len() {
+        if dest + 6 * (left_only + right_only) + 12 * straddling > self.event_limit {
             self.truncated = true;
             return None;
         }

@@ -145,6 +145,19 @@ impl KdArenaLayout {
         for (from, to, bytes) in parts {
             arena.copy_within(from..from + bytes, to);
         }
+        // The padding between parts is zero, whatever the build left there
+        // (the job build leaves its shares' spare slots behind): a tree's
+        // bytes depend on the tree alone.
+        let ends = parts.map(|(_, to, bytes)| to + bytes);
+        let starts = [
+            tight.leaves_offset,
+            tight.ropes_offset,
+            tight.refs_offset,
+            tight.total_bytes,
+        ];
+        for (end, next) in ends.into_iter().zip(starts) {
+            arena[end..next].fill(0);
+        }
         arena[tight.total_bytes..].fill(0);
         Some(tight)
     }

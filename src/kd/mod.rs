@@ -10,6 +10,7 @@
 //! ```
 
 mod build;
+mod build_jobs;
 pub mod layout;
 mod node;
 mod packet;
@@ -17,7 +18,8 @@ mod ropes;
 pub(crate) mod traverse;
 mod validate;
 
-pub use build::{build, KdEvent};
+pub use build::{build, build_depth_first, KdEvent};
+pub use build_jobs::{build_begin, KdBuild, KdJob, KdJobReport, KdJobs, KD_MAX_JOBS};
 pub use node::{
     KdInfo, KdLeaf, KdNode, KdRopes, KdStackItem, KD_FLAG_TRUNCATED, KD_MAGIC, KD_MAX_DEPTH,
     KD_STACK_LEN, KD_VERSION, NO_NODE,

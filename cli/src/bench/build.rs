@@ -5,8 +5,8 @@
 //! only those) and, borrowed for the build, the rest of the arena its
 //! requirements ask for plus the scratch; Embree's are what its device memory monitor saw the commit
 //! allocate (kept, and the most held during it), the scene's own copies
-//! excluded. Embree builds at one thread and at `--threads N`; coray's
-//! builds are single-threaded.
+//! excluded. kd-auto and Embree build at one thread and at `--threads N`
+//! (coray's build jobs on N threads).
 
 use crate::method::Preset;
 use coray::owned::{OwnedBvh, OwnedKd};
@@ -41,13 +41,15 @@ pub struct BuildRow {
     pub cells: Vec<BuildCell>,
 }
 
-fn kd(scene: &Scene, preset: Preset, name: &str) -> Result<BuildCell, String> {
+fn kd(scene: &Scene, preset: Preset, name: &str, threads: usize) -> Result<BuildCell, String> {
     let params = preset.params();
     let req = coray::kd::requirements(scene.prim_count(), &params);
     let mut o = OwnedKd::with_room(&req);
     let t = Instant::now();
-    o.build(scene, &params)
-        .map_err(|e| format!("{name}: {e}"))?;
+    o.build_with_jobs(scene, &params, |jobs| {
+        crate::kd_jobs::run(jobs, threads, scene.prim_count())
+    })
+    .map_err(|e| format!("{name}: {e}"))?;
     let ms = t.elapsed().as_secs_f64() * 1e3;
     let n = scene.prim_count().max(1) as f64;
     let scratch = coray::kd::layout::KdScratchLayout::of(&req).map_or(0, |l| l.total_bytes);
@@ -102,11 +104,13 @@ fn embree(scene: &Scene, threads: usize) -> Result<BuildCell, String> {
 pub fn run(s: &crate::scene::SceneData, repeat: usize, threads: usize) -> Result<BuildRow, String> {
     type Builder<'a> = Box<dyn Fn(&Scene) -> Result<BuildCell, String> + 'a>;
     #[allow(unused_mut)] // nothing more is pushed without Embree
-    let mut builders: Vec<Builder> = vec![
-        Box::new(|sc| kd(sc, Preset::Auto, "kd-auto")),
-        Box::new(|sc| kd(sc, Preset::Paper, "kd-paper")),
-        Box::new(tdbs_sah),
-    ];
+    let mut builders: Vec<Builder> = vec![Box::new(|sc| kd(sc, Preset::Auto, "kd-auto", 1))];
+    if threads > 1 {
+        let name = format!("kd-auto ({threads} thr)");
+        builders.push(Box::new(move |sc| kd(sc, Preset::Auto, &name, threads)));
+    }
+    builders.push(Box::new(|sc| kd(sc, Preset::Paper, "kd-paper", 1)));
+    builders.push(Box::new(tdbs_sah));
     #[cfg(feature = "embree")]
     {
         builders.push(Box::new(|sc| embree(sc, 1)));
@@ -114,8 +118,6 @@ pub fn run(s: &crate::scene::SceneData, repeat: usize, threads: usize) -> Result
             builders.push(Box::new(move |sc| embree(sc, threads)));
         }
     }
-    #[cfg(not(feature = "embree"))]
-    let _ = threads;
     let scene = s.mesh.scene();
     let mut cells: Vec<Option<BuildCell>> = vec![None; builders.len()];
     for _ in 0..repeat.max(1) {
@@ -140,8 +142,10 @@ columns: prims = primitives after triangulation; per builder: ms = best build ti
   copies excluded), B/p = bytes the structure keeps per primitive (coray: the tree its
   build packs at the arena's start; Embree: what its memory monitor saw the commit keep),
   +s = bytes per primitive the build borrows beyond that (coray: the rest of the arena its
-  requirements ask for, and the scratch; Embree: its peak above what it keeps), T = a kd build that ran out of room; x = kd-auto's time over Embree's
-  at one thread.";
+  requirements ask for, and the scratch; Embree: its peak above what it keeps), T = a kd
+  build that ran out of room; kd-auto (N thr) = the same build, its jobs on N threads (the
+  tree is byte for byte the one-thread build's; a build that runs out of room falls back
+  to one pass on one thread); x = kd-auto's time over Embree's at one thread, xN = at N.";
 
 /// Prints the rows.
 pub fn print(rows: &[BuildRow]) {
@@ -150,7 +154,15 @@ pub fn print(rows: &[BuildRow]) {
     for c in &first.cells {
         head += &format!(" | {:>22}", c.builder);
     }
+    let threads = first
+        .cells
+        .iter()
+        .find_map(|c| c.builder.strip_prefix("kd-auto (")?.strip_suffix(" thr)"))
+        .map(str::to_owned);
     head += " |      x";
+    if let Some(t) = &threads {
+        head += &format!(" | {:>6}", format!("x{t}"));
+    }
     println!("{head}");
     let mut sub = format!("{:<14} {:>7}", "", "");
     for _ in &first.cells {
@@ -168,10 +180,16 @@ pub fn print(rows: &[BuildRow]) {
                 c.scratch_per_prim
             );
         }
-        let e1 = r.cells.iter().find(|c| c.builder == "embree (1 thr)");
-        match e1 {
-            Some(e) => line += &format!(" | {:>6.1}", r.cells[0].ms / e.ms.max(1e-9)),
-            None => line += " |      -",
+        let ratio = |kd: &str, embree: &str| {
+            let cell = |name: &str| r.cells.iter().find(|c| c.builder == name);
+            match (cell(kd), cell(embree)) {
+                (Some(k), Some(e)) => format!(" | {:>6.1}", k.ms / e.ms.max(1e-9)),
+                _ => " |      -".to_owned(),
+            }
+        };
+        line += &ratio("kd-auto", "embree (1 thr)");
+        if let Some(t) = &threads {
+            line += &ratio(&format!("kd-auto ({t} thr)"), &format!("embree ({t} thr)"));
         }
         println!("{line}");
     }

@@ -1,0 +1,781 @@
+//! The kd build as jobs that the caller's threads share, without std and
+//! without allocating.
+//!
+//! [`build_begin`] builds the top of the tree on the calling thread, down to
+//! nodes of at most a sixteenth of the primitives (at most [`KD_MAX_JOBS`]
+//! of them), and makes each such node's subtree a job: its events move into
+//! a region of the event scratch of its own, and it gets its own shares of
+//! the node, leaf, rope and reference slices, in proportion to its size.
+//! Any thread may run any job ([`KdJob::run`], with a flag slice of its
+//! own); a job writes only its shares. [`KdBuild::finish`] runs the jobs
+//! nobody ran, moves every share down into the depth-first order of the
+//! one-pass build, and makes the ropes.
+//!
+//! Room is shared before anyone knows what a subtree needs, so a job may
+//! run out of its share. Each region keeps an untouched copy of its job's
+//! events (when the scratch has room for them), and `finish` runs such a
+//! job again on the calling thread, in all the room the others left free.
+//! Only when that fails too, or there was no room for the copies, does it
+//! build the whole tree again in one pass.
+//!
+//! Every split is decided by the node's own events, so the tree does not
+//! depend on how many threads ran the jobs or which: it is byte for byte
+//! [`build_depth_first`]'s whenever that one is not truncated (and the
+//! untruncated tree when jobs fit where depth-first order ran out).
+//!
+//! ```text
+//! let mut b = kd::build_begin(&scene, &params, storage, scratch)?;
+//! for job in b.jobs() { job.run(&mut flags_of_this_thread)?; }  // any threads
+//! let tree = b.finish()?;
+//! ```
+
+use super::build::{build_depth_first, check_build, Builder, KdEvent, Made, Task, MAX_NODES};
+use super::node::{KdLeaf, KdNode, KdRopes, KD_MAX_DEPTH};
+use super::{KdParams, KdScratch, KdStorage, KdTree};
+use crate::geom::{Aabb, Scene};
+use crate::Error;
+
+/// Most jobs one build makes.
+pub const KD_MAX_JOBS: usize = 32;
+
+/// A node becomes a job once it has at most this fraction of the scene's
+/// primitives: a few top levels, so the part of the build that runs on one
+/// thread stays small, and jobs enough to balance two to eight threads.
+const JOB_FRACTION: usize = 4;
+
+/// Below this many primitives a node is a job whatever the fraction.
+const MIN_JOB_PRIMS: usize = 64;
+
+/// A range of one of the build's slices.
+#[derive(Clone, Copy, Debug, Default)]
+struct Share {
+    start: usize,
+    len: usize,
+}
+
+impl Share {
+    fn end(&self) -> usize {
+        self.start + self.len
+    }
+}
+
+/// A job's subtree root and its shares of the slices.
+#[derive(Clone, Copy, Debug)]
+struct JobSpec {
+    /// The subtree's root; its events start its event region (`start` 0)
+    /// and its node is the first of its node share (`node` 0).
+    task: Task,
+    /// Its event region: the working events, then (with `copy`) an
+    /// untouched copy of the root's events at the region's end.
+    events: Share,
+    copy: bool,
+    nodes: Share,
+    leaves: Share,
+    refs: Share,
+}
+
+impl JobSpec {
+    /// Events the job may work in.
+    fn working_events(&self) -> usize {
+        self.events.len - if self.copy { self.task.total() } else { 0 }
+    }
+}
+
+/// What a job made in its shares.
+#[derive(Clone, Copy, Debug, Default)]
+struct JobDone {
+    ran: bool,
+    /// False when the job ran out of room in its shares.
+    fits: bool,
+    nodes: usize,
+    leaves: usize,
+    refs: usize,
+    depth: u32,
+}
+
+/// A kd build between [`build_begin`] and [`KdBuild::finish`]: the top of
+/// the tree is built, its subtrees wait as jobs.
+pub struct KdBuild<'s, 'a> {
+    scene: Scene<'a>,
+    params: KdParams,
+    storage: KdStorage<'a>,
+    scratch: KdScratch<'s>,
+    specs: [JobSpec; KD_MAX_JOBS],
+    done: [JobDone; KD_MAX_JOBS],
+    job_count: usize,
+    /// Nodes the top of the tree holds at the start of `storage.nodes`
+    /// (a job's root is marked there as a leaf whose index is the job's).
+    top_nodes: usize,
+    /// The top ran out of room: `finish` builds in one pass.
+    top_truncated: bool,
+    root_voxel: Aabb,
+    root_prims: usize,
+}
+
+/// Starts a kd build over `scene` in `storage`, with `scratch`: checks the
+/// input as [`super::build`] does, then builds the top of the tree on the
+/// calling thread. Run the jobs with [`KdBuild::jobs`] on any threads, then
+/// [`KdBuild::finish`].
+pub fn build_begin<'s, 'a>(
+    scene: &Scene<'a>,
+    params: &KdParams,
+    storage: KdStorage<'a>,
+    scratch: KdScratch<'s>,
+) -> Result<KdBuild<'s, 'a>, Error> {
+    check_build(scene, params, &storage, &scratch)?;
+    let mut b = Builder::new(*scene, params, storage, scratch.events, scratch.prim_flags);
+    let root = b.root_task();
+    let job_prims = (root.prims / JOB_FRACTION).max(MIN_JOB_PRIMS);
+    let mut specs = [JobSpec {
+        task: root,
+        events: Share::default(),
+        copy: false,
+        nodes: Share::default(),
+        leaves: Share::default(),
+        refs: Share::default(),
+    }; KD_MAX_JOBS];
+    let mut stack = [root; KD_MAX_DEPTH as usize + 1];
+    let (mut pending, mut count) = (0, 0);
+    let mut task = root;
+    // Depth first, left first, as the one-pass build: jobs are numbered in
+    // the order their subtrees take in the finished tree.
+    loop {
+        b.pending = count + pending;
+        let split = if task.prims > job_prims && count + pending + 2 <= KD_MAX_JOBS {
+            b.try_split(&task)
+        } else {
+            None
+        };
+        match split {
+            Some((left, right)) => {
+                stack[pending] = right;
+                pending += 1;
+                task = left;
+            }
+            None => {
+                // Park the job's events at the top of the free room.
+                let total = task.total();
+                let at = b.event_limit - total;
+                b.events.copy_within(task.start..task.start + total, at);
+                b.event_limit = at;
+                task.start = at;
+                b.nodes[task.node as usize] = KdNode::leaf(count as u32);
+                specs[count].task = task;
+                count += 1;
+                if pending == 0 {
+                    break;
+                }
+                pending -= 1;
+                task = stack[pending];
+            }
+        }
+    }
+    let top_nodes = b.node_top;
+    let top_truncated = b.truncated;
+    let (mut storage, events, prim_flags) = b.into_parts();
+    let specs_made = &mut specs[..count];
+    place_events(events, specs_made);
+    share_storage(&mut storage, top_nodes, specs_made);
+    Ok(KdBuild {
+        scene: *scene,
+        params: *params,
+        storage,
+        scratch: KdScratch { events, prim_flags },
+        specs,
+        done: [JobDone::default(); KD_MAX_JOBS],
+        job_count: count,
+        top_nodes,
+        top_truncated,
+        root_voxel: root.voxel,
+        root_prims: root.prims,
+    })
+}
+
+/// `total` shared in proportion to `weight(spec)`, rounded down (so the
+/// shares never sum past it).
+struct Shares {
+    total: u128,
+    sum: u128,
+    weight: fn(&JobSpec) -> usize,
+}
+
+impl Shares {
+    fn new(total: usize, specs: &[JobSpec], weight: fn(&JobSpec) -> usize) -> Shares {
+        let sum = specs.iter().map(|s| weight(s) as u128).sum::<u128>();
+        Shares {
+            total: total as u128,
+            sum: sum.max(1),
+            weight,
+        }
+    }
+
+    fn of(&self, spec: &JobSpec) -> usize {
+        (self.total * (self.weight)(spec) as u128 / self.sum) as usize
+    }
+}
+
+/// Gives each job an event region in proportion to its parked events and
+/// moves them to its start, with a copy at its end when every region has
+/// room for both. Regions are laid from the top down, job 0 highest; the
+/// jobs were parked from the top down too, so moving them in reverse
+/// order only ever writes below every event still to move.
+fn place_events(events: &mut [KdEvent], specs: &mut [JobSpec]) {
+    let room = events.len();
+    let parked: usize = specs.iter().map(|s| s.task.total()).sum();
+    // Each region is at least its events (room >= parked), at least twice
+    // them when room >= 2 parked.
+    let copy = room >= 2 * parked;
+    let shares = Shares::new(room, specs, |s| s.task.total());
+    let mut end = room;
+    for s in specs.iter_mut() {
+        let len = shares.of(s);
+        s.events = Share {
+            start: end - len,
+            len,
+        };
+        s.copy = copy;
+        end -= len;
+    }
+    for s in specs.iter_mut().rev() {
+        let (from, n) = (s.task.start, s.task.total());
+        if copy {
+            let at = s.events.end() - n;
+            events.copy_within(from..from + n, at);
+            events.copy_within(at..at + n, s.events.start);
+        } else {
+            events.copy_within(from..from + n, s.events.start);
+        }
+        s.task.start = 0;
+    }
+}
+
+/// The most nodes and leaves a tree may use of these slices.
+fn limits(storage: &KdStorage) -> (usize, usize) {
+    (
+        storage.nodes.len().min(MAX_NODES),
+        storage.leaves.len().min(MAX_NODES / 2),
+    )
+}
+
+/// Gives each job shares of the nodes (after the top's), the leaves and
+/// ropes, and the references, in order and in proportion to its
+/// primitives; its root becomes node 0 of its share.
+fn share_storage(storage: &mut KdStorage, top_nodes: usize, specs: &mut [JobSpec]) {
+    let (node_limit, leaf_limit) = limits(storage);
+    // Every job needs a node and a leaf, an empty one too.
+    let nodes = Shares::new(node_limit.saturating_sub(top_nodes), specs, |s| {
+        s.task.prims + 1
+    });
+    let leaves = Shares::new(leaf_limit, specs, |s| s.task.prims + 1);
+    let refs = Shares::new(storage.refs.len(), specs, |s| s.task.prims);
+    let (mut n, mut l, mut r) = (top_nodes, 0, 0);
+    for s in specs.iter_mut() {
+        s.nodes = Share {
+            start: n,
+            len: nodes.of(s),
+        };
+        s.leaves = Share {
+            start: l,
+            len: leaves.of(s),
+        };
+        s.refs = Share {
+            start: r,
+            len: refs.of(s),
+        };
+        n = s.nodes.end();
+        l = s.leaves.end();
+        r = s.refs.end();
+        s.task.node = 0;
+        s.task.ref_budget = s.refs.len;
+    }
+}
+
+impl<'s, 'a> KdBuild<'s, 'a> {
+    /// How many jobs wait (0 when the top already ran out of room).
+    pub fn job_count(&self) -> usize {
+        if self.top_truncated {
+            0
+        } else {
+            self.job_count
+        }
+    }
+
+    /// The jobs, each with its own shares of the slices, to hand to any
+    /// threads (a job is `Send`). Jobs not run when `finish` is called run
+    /// there.
+    pub fn jobs(&mut self) -> KdJobs<'_> {
+        let count = self.job_count();
+        split_jobs(
+            self.scene,
+            &self.params,
+            &self.specs[..count],
+            &mut self.done[..count],
+            &mut self.storage,
+            &mut *self.scratch.events,
+            self.top_nodes,
+        )
+    }
+
+    /// Runs the jobs nobody ran, on this thread, again those that ran out
+    /// of their shares, lays the subtrees out in depth-first order and
+    /// makes the ropes. Builds in one pass instead when the top ran out of
+    /// room, or a job does again.
+    pub fn finish(self) -> Result<KdTree<'a>, Error> {
+        Ok(self.finish_with_report()?.0)
+    }
+
+    /// [`Self::finish`], and how the tree was made.
+    pub fn finish_with_report(self) -> Result<(KdTree<'a>, KdJobReport), Error> {
+        let KdBuild {
+            scene,
+            params,
+            mut storage,
+            scratch,
+            mut specs,
+            mut done,
+            job_count,
+            top_nodes,
+            top_truncated,
+            root_voxel,
+            root_prims,
+        } = self;
+        let KdScratch { events, prim_flags } = scratch;
+        let mut report = KdJobReport {
+            jobs: job_count,
+            reruns: 0,
+            one_pass: true,
+        };
+        if top_truncated {
+            let tree =
+                build_depth_first(&scene, &params, storage, KdScratch { events, prim_flags });
+            return Ok((tree?, report));
+        }
+        let (specs, done) = (&mut specs[..job_count], &mut done[..job_count]);
+        let jobs = split_jobs(
+            scene,
+            &params,
+            specs,
+            done,
+            &mut storage,
+            &mut *events,
+            top_nodes,
+        );
+        for job in jobs {
+            if !job.done.ran {
+                job.run(&mut *prim_flags)?;
+            }
+        }
+        // When most jobs outgrew their shares the tree is unlikely to fit
+        // at all (SPD gears): build in one pass rather than run them again
+        // one by one first.
+        let failed = done.iter().filter(|d| !d.fits).count();
+        report.reruns = failed;
+        let reruns = if 2 * failed > job_count {
+            None
+        } else {
+            Reruns::park(events, specs, done)
+        };
+        let made = reruns.and_then(|reruns| {
+            let mut layout = Layout {
+                scene,
+                params,
+                storage: &mut storage,
+                specs,
+                done,
+                reruns,
+                prim_flags: &mut *prim_flags,
+            };
+            layout.assemble(top_nodes)
+        });
+        match made {
+            Some(made) => {
+                let made = Made {
+                    bounds: root_voxel,
+                    prims: root_prims,
+                    ..made
+                };
+                report.one_pass = false;
+                Ok((made.into_tree(&scene, storage), report))
+            }
+            None => {
+                let scratch = KdScratch { events, prim_flags };
+                Ok((
+                    build_depth_first(&scene, &params, storage, scratch)?,
+                    report,
+                ))
+            }
+        }
+    }
+}
+
+/// How [`KdBuild::finish_with_report`] made the tree.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct KdJobReport {
+    /// Jobs the top of the tree was cut into.
+    pub jobs: usize,
+    /// Jobs that outgrew their shares (run again in `finish` unless
+    /// `one_pass`).
+    pub reruns: usize,
+    /// The tree was built again in one pass ([`build_depth_first`]): the
+    /// top or a job ran out of room even in its second run, or most jobs
+    /// outgrew their shares.
+    pub one_pass: bool,
+}
+
+/// The event scratch once the jobs ran: free below `limit`, the copies of
+/// the jobs to run again parked above it.
+struct Reruns<'e> {
+    events: &'e mut [KdEvent],
+    limit: usize,
+    /// Where each job's parked copy starts (for the jobs that failed).
+    copy_at: [usize; KD_MAX_JOBS],
+}
+
+impl<'e> Reruns<'e> {
+    /// Moves the copies of the jobs that ran out of room to the top of the
+    /// scratch, highest region first (each moves up, past nothing still
+    /// needed). None when a job failed and there are no copies.
+    fn park(events: &'e mut [KdEvent], specs: &[JobSpec], done: &[JobDone]) -> Option<Reruns<'e>> {
+        let mut r = Reruns {
+            limit: events.len(),
+            events,
+            copy_at: [0; KD_MAX_JOBS],
+        };
+        for (k, (s, d)) in specs.iter().zip(done).enumerate() {
+            if d.fits {
+                continue;
+            }
+            if !s.copy {
+                return None;
+            }
+            let n = s.task.total();
+            let from = s.events.end() - n;
+            r.limit -= n;
+            r.events.copy_within(from..from + n, r.limit);
+            r.copy_at[k] = r.limit;
+        }
+        Some(r)
+    }
+}
+
+/// What [`Layout::assemble`] works on: the storage with the jobs' shares,
+/// and what it needs to run a failed job again.
+struct Layout<'l, 'a, 'e> {
+    scene: Scene<'a>,
+    params: KdParams,
+    storage: &'l mut KdStorage<'a>,
+    specs: &'l mut [JobSpec],
+    done: &'l mut [JobDone],
+    reruns: Reruns<'e>,
+    prim_flags: &'l mut [u8],
+}
+
+/// Where the finished tree stands: the next node pair, leaf and reference.
+#[derive(Clone, Copy)]
+struct Tops {
+    node: usize,
+    leaf: usize,
+    re: usize,
+}
+
+impl Layout<'_, '_, '_> {
+    /// Moves the top's nodes and every job's shares into the one-pass
+    /// build's layout: node pairs, leaves and references in depth-first
+    /// preorder, left first. Everything moves down (a share starts at or
+    /// after where its contents end up), so each copy runs forward in
+    /// place. None when a job fails again.
+    fn assemble(&mut self, top_nodes: usize) -> Option<Made> {
+        let mut top = [KdNode::default(); 2 * KD_MAX_JOBS];
+        top[..top_nodes].copy_from_slice(&self.storage.nodes[..top_nodes]);
+        // (top node, its slot in the finished tree)
+        let mut stack = [(0usize, 0usize); 2 * KD_MAX_JOBS];
+        let mut sp = 1;
+        let mut at = Tops {
+            node: 1,
+            leaf: 0,
+            re: 0,
+        };
+        let mut depth = 0;
+        while sp > 0 {
+            sp -= 1;
+            let (t, slot) = stack[sp];
+            let n = top[t];
+            if !n.is_leaf() {
+                let c = at.node;
+                at.node += 2;
+                self.storage.nodes[slot] = KdNode::interior(n.axis(), n.split(), c as u32);
+                let l = n.index() as usize;
+                stack[sp] = (l + 1, c + 1);
+                stack[sp + 1] = (l, c);
+                sp += 2;
+                continue;
+            }
+            let j = n.index() as usize;
+            if !self.done[j].fits {
+                self.rerun(j, at)?;
+            }
+            self.place(j, slot, at);
+            let d = self.done[j];
+            at.node += d.nodes - 1;
+            at.leaf += d.leaves;
+            at.re += d.refs;
+            depth = depth.max(d.depth);
+        }
+        Some(Made {
+            node_count: at.node,
+            leaf_count: at.leaf,
+            ref_count: at.re,
+            depth,
+            truncated: false,
+            bounds: Aabb::EMPTY,
+            prims: 0,
+        })
+    }
+
+    /// Moves job `j`'s subtree to its place: its root to `slot`, its other
+    /// nodes, its leaves and references to `at`, renumbered.
+    fn place(&mut self, j: usize, slot: usize, at: Tops) {
+        let KdStorage {
+            nodes,
+            leaves,
+            ropes,
+            refs,
+        } = &mut *self.storage;
+        let (s, d) = (&self.specs[j], &self.done[j]);
+        let (nb, lb, rb) = (at.node as u32, at.leaf as u32, at.re as u32);
+        let moved = |r: KdNode| {
+            if r.is_leaf() {
+                KdNode::leaf(r.index() + lb)
+            } else {
+                KdNode::interior(r.axis(), r.split(), r.index() - 1 + nb)
+            }
+        };
+        nodes[slot] = moved(nodes[s.nodes.start]);
+        for i in 1..d.nodes {
+            nodes[at.node + i - 1] = moved(nodes[s.nodes.start + i]);
+        }
+        for i in 0..d.leaves {
+            let l = leaves[s.leaves.start + i];
+            leaves[at.leaf + i] = KdLeaf {
+                first_ref: l.first_ref + rb,
+                ref_count: l.ref_count,
+            };
+            ropes[at.leaf + i] = ropes[s.leaves.start + i];
+        }
+        refs.copy_within(s.refs.start..s.refs.start + d.refs, at.re);
+    }
+
+    /// Runs job `j` again from its copy, in all the room between `at` and
+    /// the jobs after it (moved to the slices' ends first). None when it
+    /// runs out of room again.
+    fn rerun(&mut self, j: usize, at: Tops) -> Option<()> {
+        let (node_limit, leaf_limit) = limits(self.storage);
+        let mut end = Tops {
+            node: node_limit,
+            leaf: leaf_limit,
+            re: self.storage.refs.len(),
+        };
+        // Later jobs that made their subtrees, to the ends, last first.
+        for k in (j + 1..self.specs.len()).rev() {
+            let d = self.done[k];
+            if !d.fits {
+                continue;
+            }
+            let KdStorage {
+                nodes,
+                leaves,
+                ropes,
+                refs,
+            } = &mut *self.storage;
+            let s = &mut self.specs[k];
+            end.node -= d.nodes;
+            end.leaf -= d.leaves;
+            end.re -= d.refs;
+            nodes.copy_within(s.nodes.start..s.nodes.start + d.nodes, end.node);
+            leaves.copy_within(s.leaves.start..s.leaves.start + d.leaves, end.leaf);
+            ropes.copy_within(s.leaves.start..s.leaves.start + d.leaves, end.leaf);
+            refs.copy_within(s.refs.start..s.refs.start + d.refs, end.re);
+            s.nodes.start = end.node;
+            s.leaves.start = end.leaf;
+            s.refs.start = end.re;
+        }
+        if at.node >= end.node || at.leaf >= end.leaf || at.re > end.re {
+            return None;
+        }
+        let s = &mut self.specs[j];
+        let n = s.task.total();
+        let (work, parked) = self.reruns.events.split_at_mut(self.reruns.limit);
+        let from = self.reruns.copy_at[j] - self.reruns.limit;
+        work.get_mut(..n)?.copy_from_slice(&parked[from..from + n]);
+        let KdStorage {
+            nodes,
+            leaves,
+            ropes,
+            refs,
+        } = &mut *self.storage;
+        let storage = KdStorage {
+            nodes: &mut nodes[at.node..end.node],
+            leaves: &mut leaves[at.leaf..end.leaf],
+            ropes: &mut ropes[at.leaf..end.leaf],
+            refs: &mut refs[at.re..end.re],
+        };
+        if storage.refs.len() < s.task.prims {
+            return None;
+        }
+        let mut b = Builder::new(
+            self.scene,
+            &self.params,
+            storage,
+            work,
+            &mut *self.prim_flags,
+        );
+        b.as_job(s.task.prims);
+        b.run(s.task);
+        if b.truncated {
+            return None;
+        }
+        self.done[j] = JobDone {
+            ran: true,
+            fits: true,
+            nodes: b.node_top,
+            leaves: b.leaf_top,
+            refs: b.ref_top,
+            depth: b.depth,
+        };
+        s.nodes.start = at.node;
+        s.leaves.start = at.leaf;
+        s.refs.start = at.re;
+        Some(())
+    }
+}
+
+/// One job's subtree: its root, its shares of the slices, where it reports.
+pub struct KdJob<'j> {
+    scene: Scene<'j>,
+    params: KdParams,
+    task: Task,
+    nodes: &'j mut [KdNode],
+    leaves: &'j mut [KdLeaf],
+    ropes: &'j mut [KdRopes],
+    refs: &'j mut [u32],
+    events: &'j mut [KdEvent],
+    done: &'j mut JobDone,
+}
+
+impl KdJob<'_> {
+    /// The job's size in split events: run the largest first.
+    pub fn weight(&self) -> usize {
+        self.task.total()
+    }
+
+    /// Builds the job's subtree in its shares. `prim_flags` is this
+    /// thread's: at least one byte per primitive of the scene, its contents
+    /// anything (two threads never share one at the same time).
+    pub fn run(self, prim_flags: &mut [u8]) -> Result<(), Error> {
+        let n = self.scene.prim_count();
+        if prim_flags.len() < n {
+            return Err(Error::SliceTooSmall {
+                slice: "prim_flags",
+                needed: n,
+                got: prim_flags.len(),
+            });
+        }
+        let task = self.task;
+        *self.done = JobDone {
+            ran: true,
+            ..JobDone::default()
+        };
+        if self.nodes.is_empty() || self.leaves.is_empty() || self.refs.len() < task.prims {
+            return Ok(());
+        }
+        let storage = KdStorage {
+            nodes: self.nodes,
+            leaves: self.leaves,
+            ropes: self.ropes,
+            refs: self.refs,
+        };
+        let mut b = Builder::new(self.scene, &self.params, storage, self.events, prim_flags);
+        b.as_job(task.prims);
+        b.run(task);
+        *self.done = JobDone {
+            ran: true,
+            fits: !b.truncated,
+            nodes: b.node_top,
+            leaves: b.leaf_top,
+            refs: b.ref_top,
+            depth: b.depth,
+        };
+        Ok(())
+    }
+}
+
+/// The jobs of a build, in order, each split off the slices' fronts (events:
+/// their backs).
+pub struct KdJobs<'j> {
+    scene: Scene<'j>,
+    params: KdParams,
+    specs: &'j [JobSpec],
+    done: core::slice::IterMut<'j, JobDone>,
+    nodes: &'j mut [KdNode],
+    leaves: &'j mut [KdLeaf],
+    ropes: &'j mut [KdRopes],
+    refs: &'j mut [u32],
+    events: &'j mut [KdEvent],
+}
+
+fn split_jobs<'j>(
+    scene: Scene<'j>,
+    params: &KdParams,
+    specs: &'j [JobSpec],
+    done: &'j mut [JobDone],
+    storage: &'j mut KdStorage,
+    events: &'j mut [KdEvent],
+    top_nodes: usize,
+) -> KdJobs<'j> {
+    KdJobs {
+        scene,
+        params: *params,
+        specs,
+        done: done.iter_mut(),
+        nodes: &mut storage.nodes[top_nodes..],
+        leaves: &mut storage.leaves[..],
+        ropes: &mut storage.ropes[..],
+        refs: &mut storage.refs[..],
+        events,
+    }
+}
+
+fn take_front<'j, T>(s: &mut &'j mut [T], n: usize) -> &'j mut [T] {
+    let (a, b) = core::mem::take(s).split_at_mut(n);
+    *s = b;
+    a
+}
+
+fn take_back<'j, T>(s: &mut &'j mut [T], n: usize) -> &'j mut [T] {
+    let rest = core::mem::take(s);
+    let at = rest.len() - n;
+    let (a, b) = rest.split_at_mut(at);
+    *s = a;
+    b
+}
+
+impl<'j> Iterator for KdJobs<'j> {
+    type Item = KdJob<'j>;
+
+    fn next(&mut self) -> Option<KdJob<'j>> {
+        let (s, rest) = self.specs.split_first()?;
+        self.specs = rest;
+        let region = take_back(&mut self.events, s.events.len);
+        Some(KdJob {
+            scene: self.scene,
+            params: self.params,
+            task: s.task,
+            nodes: take_front(&mut self.nodes, s.nodes.len),
+            leaves: take_front(&mut self.leaves, s.leaves.len),
+            ropes: take_front(&mut self.ropes, s.leaves.len),
+            refs: take_front(&mut self.refs, s.refs.len),
+            events: &mut region[..s.working_events()],
+            done: self.done.next()?,
+        })
+    }
+}

@@ -1,0 +1,261 @@
+//! The kd build as jobs (`build_begin`, `KdJob::run`, `finish`) against the
+//! one-pass depth-first build: the same bytes whatever runs the jobs, in
+//! whatever order, on however many threads.
+
+mod common;
+
+use common::{random_scene, Rng};
+use coray::kd::{
+    self, KdEvent, KdInfo, KdJobReport, KdLeaf, KdNode, KdParams, KdRequirements, KdRopes,
+    KdScratch, KdStorage, KD_FLAG_TRUNCATED,
+};
+use coray::Scene;
+use coray_scenes::spd::{self, Options};
+use coray_scenes::SceneMesh;
+
+/// A build's slices, owned.
+struct Room {
+    nodes: Vec<KdNode>,
+    leaves: Vec<KdLeaf>,
+    ropes: Vec<KdRopes>,
+    refs: Vec<u32>,
+    events: Vec<KdEvent>,
+    flags: Vec<u8>,
+}
+
+impl Room {
+    fn new(r: &KdRequirements) -> Room {
+        Room {
+            nodes: vec![KdNode::default(); r.nodes],
+            leaves: vec![KdLeaf::default(); r.leaves],
+            ropes: vec![KdRopes::default(); r.ropes],
+            refs: vec![0; r.refs],
+            events: vec![KdEvent::default(); r.events],
+            flags: vec![0; r.prim_flags],
+        }
+    }
+    fn parts(&mut self) -> (KdStorage<'_>, KdScratch<'_>) {
+        (
+            KdStorage {
+                nodes: &mut self.nodes,
+                leaves: &mut self.leaves,
+                ropes: &mut self.ropes,
+                refs: &mut self.refs,
+            },
+            KdScratch {
+                events: &mut self.events,
+                prim_flags: &mut self.flags,
+            },
+        )
+    }
+}
+
+/// What a tree is, byte for byte: its info and its four parts.
+#[derive(Debug, PartialEq)]
+struct Made {
+    info: KdInfo,
+    nodes: Vec<KdNode>,
+    leaves: Vec<KdLeaf>,
+    ropes: Vec<KdRopes>,
+    refs: Vec<u32>,
+}
+
+fn made(t: &kd::KdTree) -> Made {
+    t.validate().expect("validate");
+    let (nodes, leaves, ropes, refs) = t.parts();
+    Made {
+        info: *t.info(),
+        nodes: nodes.to_vec(),
+        leaves: leaves.to_vec(),
+        ropes: ropes.to_vec(),
+        refs: refs.to_vec(),
+    }
+}
+
+fn depth_first(scene: &Scene, params: &KdParams, req: &KdRequirements) -> Made {
+    let mut room = Room::new(req);
+    let (storage, scratch) = room.parts();
+    made(&kd::build_depth_first(scene, params, storage, scratch).expect("build"))
+}
+
+/// How the jobs are run.
+#[derive(Clone, Copy, Debug)]
+enum Run {
+    /// None: `finish` runs them all.
+    ByFinish,
+    /// Last first, each with its own flags.
+    Reversed,
+    /// Shared out to this many threads.
+    Threads(usize),
+}
+
+fn by_jobs(
+    scene: &Scene,
+    params: &KdParams,
+    req: &KdRequirements,
+    run: Run,
+) -> (Made, KdJobReport) {
+    let mut room = Room::new(req);
+    let (storage, scratch) = room.parts();
+    let mut b = kd::build_begin(scene, params, storage, scratch).expect("begin");
+    let jobs = b.job_count();
+    let n = scene.prim_count();
+    match run {
+        Run::ByFinish => {}
+        Run::Reversed => {
+            let all: Vec<_> = b.jobs().collect();
+            assert_eq!(all.len(), jobs);
+            for job in all.into_iter().rev() {
+                job.run(&mut vec![0xA5; n]).expect("run");
+            }
+        }
+        Run::Threads(t) => {
+            let queue = std::sync::Mutex::new(b.jobs().collect::<Vec<_>>());
+            std::thread::scope(|s| {
+                for _ in 0..t {
+                    s.spawn(|| {
+                        let mut flags = vec![0u8; n];
+                        while let Some(job) = queue.lock().unwrap().pop() {
+                            job.run(&mut flags).expect("run");
+                        }
+                    });
+                }
+            });
+        }
+    }
+    let (tree, report) = b.finish_with_report().expect("finish");
+    assert_eq!(report.jobs, jobs);
+    (made(&tree), report)
+}
+
+fn spd_mesh(name: &str, size: Option<u32>) -> SceneMesh {
+    SceneMesh::from_nff(&spd::generate(name, size, &Options::default()).unwrap())
+}
+
+/// Every way of running the jobs gives the same bytes, the depth-first
+/// build's when that one is not truncated, and the scene was cut into
+/// several jobs. Returns whether the depth-first build was truncated.
+fn check_equal(scene: &Scene, params: &KdParams, what: &str) -> bool {
+    let req = kd::requirements(scene.prim_count(), params);
+    let reference = depth_first(scene, params, &req);
+    let truncated = reference.info.flags & KD_FLAG_TRUNCATED != 0;
+    let mut first: Option<Made> = None;
+    for run in [Run::ByFinish, Run::Reversed, Run::Threads(3)] {
+        let (m, report) = by_jobs(scene, params, &req, run);
+        assert!(report.jobs >= 3, "{what}: {report:?}");
+        if truncated {
+            // The depth-first build spends the room on the subtrees it
+            // reaches first; when every job fits its share, the job build
+            // is the untruncated tree, else it is the depth-first one.
+            if m.info.flags & KD_FLAG_TRUNCATED != 0 {
+                assert!(m == reference, "{what} {run:?}: the fallback differs");
+            }
+            if let Some(f) = &first {
+                assert!(&m == f, "{what} {run:?}: runs differ");
+            }
+            first = Some(m);
+        } else {
+            // Made by the jobs, not by the one-pass fallback.
+            assert!(!report.one_pass, "{what}: {report:?}");
+            assert!(m == reference, "{what} {run:?}: the job build differs");
+        }
+    }
+    truncated
+}
+
+#[test]
+fn job_build_equals_depth_first_on_spd_scenes() {
+    let mut truncated = Vec::new();
+    for &(name, _) in spd::SCENES {
+        let mesh = spd_mesh(name, None);
+        for params in [KdParams::auto(), KdParams::paper()] {
+            if check_equal(&mesh.scene(), &params, &format!("{name} {params:?}")) {
+                truncated.push((name, params.sah_termination));
+            }
+        }
+    }
+    // The one build here the depth-first build truncates.
+    assert_eq!(truncated, [("gears", true)]);
+}
+
+#[test]
+fn job_build_equals_depth_first_on_random_scenes() {
+    let mut rng = Rng(7);
+    for (tris, spheres, cones) in [(3000, 300, 100), (5000, 0, 0), (0, 2000, 500)] {
+        let o = random_scene(&mut rng, tris, spheres, cones, 10.0);
+        assert!(!check_equal(
+            &o.scene(),
+            &KdParams::auto(),
+            &format!("random {tris}")
+        ));
+    }
+}
+
+/// With the least room every job runs out of its share; `finish` then
+/// builds in one pass: the depth-first build's (truncated) tree.
+#[test]
+fn job_build_falls_back_to_one_pass_when_a_share_runs_out() {
+    let mesh = spd_mesh("teapot", Some(12));
+    let scene = mesh.scene();
+    let params = KdParams::auto();
+    let ideal = kd::requirements(scene.prim_count(), &params);
+    let least = kd::KdRequirements {
+        refs: 2 * scene.prim_count(),
+        leaves: scene.prim_count(),
+        ropes: scene.prim_count(),
+        nodes: 2 * scene.prim_count(),
+        ..ideal
+    };
+    let reference = depth_first(&scene, &params, &least);
+    assert_ne!(reference.info.flags & KD_FLAG_TRUNCATED, 0);
+    for run in [Run::ByFinish, Run::Threads(2)] {
+        let (m, report) = by_jobs(&scene, &params, &least, run);
+        assert!(report.one_pass, "{report:?}");
+        assert!(m == reference, "{run:?}");
+    }
+}
+
+/// With references for the tree and barely more, shares in proportion to
+/// primitives are too small for some jobs; `finish` runs those again in
+/// the room the others left, and the tree is still the one-pass build's.
+#[test]
+fn a_job_that_outgrows_its_share_runs_again_in_finish() {
+    let mesh = spd_mesh("teapot", None);
+    let scene = mesh.scene();
+    let params = KdParams::auto();
+    let ideal = kd::requirements(scene.prim_count(), &params);
+    let reference = depth_first(&scene, &params, &ideal);
+    let refs = reference.info.ref_count as usize;
+    let tight = KdRequirements {
+        refs: refs + refs / 50,
+        ..ideal
+    };
+    for run in [Run::ByFinish, Run::Threads(2)] {
+        let (m, report) = by_jobs(&scene, &params, &tight, run);
+        assert!(report.reruns > 0 && !report.one_pass, "{report:?}");
+        assert!(m == reference, "{run:?}");
+    }
+}
+
+#[test]
+fn a_job_given_too_few_flags_is_refused() {
+    let mesh = spd_mesh("tree", Some(6));
+    let scene = mesh.scene();
+    let params = KdParams::auto();
+    let mut room = Room::new(&kd::requirements(scene.prim_count(), &params));
+    let (storage, scratch) = room.parts();
+    let mut b = kd::build_begin(&scene, &params, storage, scratch).unwrap();
+    let job = b.jobs().next().unwrap();
+    let n = scene.prim_count();
+    assert_eq!(
+        job.run(&mut vec![0; n - 1]),
+        Err(coray::Error::SliceTooSmall {
+            slice: "prim_flags",
+            needed: n,
+            got: n - 1
+        })
+    );
+    // The refused job runs in `finish`.
+    let t = b.finish().unwrap();
+    t.validate().unwrap();
+}
