@@ -14,7 +14,7 @@
 #define CORAY_VERSION_MAJOR 1
 
 // Minor version: new functions or struct fields, compatible.
-#define CORAY_VERSION_MINOR 0
+#define CORAY_VERSION_MINOR 1
 
 // Patch version: fixes only.
 #define CORAY_VERSION_PATCH 0
@@ -381,6 +381,26 @@ typedef struct CorayKdTreeInfo {
   // Upper corner of the scene box.
   float bounds_max[3];
 } CorayKdTreeInfo;
+
+// Runs job `job` (0 to `job_count` - 1) of the build that called
+// `run_jobs`, with `flags`: at least `flags_bytes` writable bytes that
+// only this call uses (one buffer per thread, reused from job to job). A
+// job runs at most once: a second call for it fails with
+// `CORAY_STATUS_INVALID_PARAMETER`. Call it only while `run_jobs` runs
+// (`jobs` is gone afterwards). A job whose call failed, or that no call
+// ran, runs on the building thread once `run_jobs` returns.
+typedef enum CorayStatus (*CorayKdRunJob)(void *jobs, size_t job, uint8_t *flags, size_t flags_bytes);
+
+// The caller's job runner for `coray_kdtree_build_jobs`: runs
+// `run_job(jobs, i, flags, flags_bytes)` for each `i` below `job_count`,
+// on any threads, any number at once (each with its own flags), and
+// returns only when every call it made has returned. `ctx` is the
+// caller's, passed through. NULL: the build runs every job itself.
+typedef void (*CorayKdRunJobs)(void *ctx,
+                               size_t job_count,
+                               size_t flags_bytes,
+                               CorayKdRunJob run_job,
+                               void *jobs);
 
 // How rays walk a kd-tree: `CORAY_TRAVERSAL_HIERARCHICAL`,
 // `CORAY_TRAVERSAL_ROPES` or `CORAY_TRAVERSAL_PACKETS` (all give the same
@@ -865,6 +885,27 @@ enum CorayStatus coray_kdtree_build(const struct CorayScene *scene,
                                     void *scratch,
                                     size_t scratch_bytes,
                                     size_t *needed_bytes);
+
+// `coray_kdtree_build`, its work shared with the caller's threads: the
+// build does the top of the tree, then calls `run_jobs(ctx, job_count,
+// flags_bytes, run_job, jobs)` (see `CorayKdRunJobs`), which runs the
+// jobs on any threads and returns when they are done, and finishes the
+// tree. The arena's bytes are exactly those `coray_kdtree_build` writes,
+// whatever ran the jobs; each thread brings `flags_bytes` bytes of its
+// own (the primitive count). A tree the room truncates is built in one
+// pass after the jobs, on this thread. `run_jobs` NULL: the build runs
+// its jobs itself, as `coray_kdtree_build` does.
+//
+// Safety: as `coray_kdtree_build`; `run_jobs` keeps its contract.
+enum CorayStatus coray_kdtree_build_jobs(const struct CorayScene *scene,
+                                         const struct CorayKdParams *params,
+                                         void *arena,
+                                         size_t arena_bytes,
+                                         void *scratch,
+                                         size_t scratch_bytes,
+                                         size_t *needed_bytes,
+                                         CorayKdRunJobs run_jobs,
+                                         void *ctx);
 
 // Opens the kd-tree in `arena` (as `coray_kdtree_build` wrote it, or a
 // copy of it) with the scene it was built on: O(1) checks of the header,

@@ -80,6 +80,7 @@ const _: () = {
 /// Ranges are kept as `[start, end)`; read ones fill the list from the
 /// front, written ones from the back, so [`Regions::check`] compares only
 /// the pairs that matter (a one-ray call has three written of about ten).
+#[derive(Clone, Copy)]
 pub(crate) struct Regions {
     list: [(usize, usize); REGIONS],
     read: usize,

@@ -5,7 +5,7 @@
 use crate::abi::*;
 use crate::carve::{self, check_arena, Out, OutValue, Regions, Versioned};
 use crate::handle::{self, Handle, Sealed, KIND_KD};
-use crate::{guard, CorayKdTree, CorayStatus};
+use crate::{guard, CorayKdRunJobs, CorayKdTree, CorayStatus};
 use coray::kd::layout::{KdArenaHeader, KdArenaLayout, KdScratchLayout, KD_HEADER_BYTES};
 use coray::kd::{
     self, KdLeaf, KdNode, KdRopes, KdStackItem, KdTree, Traversal, KD_STACK_LEN, PACKET_LANES,
@@ -257,6 +257,69 @@ pub unsafe extern "C" fn coray_kdtree_build(
     scratch_bytes: usize,
     needed_bytes: *mut usize,
 ) -> CorayStatus {
+    // SAFETY: the caller's contract is build_kd's.
+    unsafe {
+        build_kd(
+            scene,
+            params,
+            (arena, arena_bytes),
+            (scratch, scratch_bytes),
+            needed_bytes,
+            None,
+            core::ptr::null_mut(),
+        )
+    }
+}
+
+/// `coray_kdtree_build`, its work shared with the caller's threads: the
+/// build does the top of the tree, then calls `run_jobs(ctx, job_count,
+/// flags_bytes, run_job, jobs)` (see `CorayKdRunJobs`), which runs the
+/// jobs on any threads and returns when they are done, and finishes the
+/// tree. The arena's bytes are exactly those `coray_kdtree_build` writes,
+/// whatever ran the jobs; each thread brings `flags_bytes` bytes of its
+/// own (the primitive count). A tree the room truncates is built in one
+/// pass after the jobs, on this thread. `run_jobs` NULL: the build runs
+/// its jobs itself, as `coray_kdtree_build` does.
+///
+/// Safety: as `coray_kdtree_build`; `run_jobs` keeps its contract.
+#[no_mangle]
+#[allow(clippy::too_many_arguments)]
+pub unsafe extern "C" fn coray_kdtree_build_jobs(
+    scene: *const CorayScene,
+    params: *const CorayKdParams,
+    arena: *mut c_void,
+    arena_bytes: usize,
+    scratch: *mut c_void,
+    scratch_bytes: usize,
+    needed_bytes: *mut usize,
+    run_jobs: CorayKdRunJobs,
+    ctx: *mut c_void,
+) -> CorayStatus {
+    // SAFETY: the caller's contract is build_kd's.
+    unsafe {
+        build_kd(
+            scene,
+            params,
+            (arena, arena_bytes),
+            (scratch, scratch_bytes),
+            needed_bytes,
+            run_jobs,
+            ctx,
+        )
+    }
+}
+
+/// Both builds: `coray_kdtree_build`'s contract, and `run_jobs` (if any)
+/// is called as `CorayKdRunJobs` says.
+unsafe fn build_kd(
+    scene: *const CorayScene,
+    params: *const CorayKdParams,
+    (arena, arena_bytes): (*mut c_void, usize),
+    (scratch, scratch_bytes): (*mut c_void, usize),
+    needed_bytes: *mut usize,
+    run_jobs: CorayKdRunJobs,
+    ctx: *mut c_void,
+) -> CorayStatus {
     guard(|| {
         let mut regions = Regions::new();
         // SAFETY: the caller passes valid scene and params pointers or NULL.
@@ -307,7 +370,11 @@ pub unsafe extern "C" fn coray_kdtree_build(
                 },
             )
         };
-        let info = *kd::build(&scene, &p, storage, scratch)?.info();
+        let mut build = kd::build_begin(&scene, &p, storage, scratch)?;
+        if let Some(run_jobs) = run_jobs {
+            crate::build_jobs::run_with(build.jobs(), run_jobs, ctx, n, regions);
+        }
+        let info = *build.finish()?.info();
         // The tree packed at the arena's start: the caller keeps only
         // arena_bytes_used of it.
         // SAFETY: the build's views of the arena are gone (only `info`, a

@@ -21,6 +21,7 @@
 extern crate std;
 
 mod abi;
+mod build_jobs;
 mod bvh;
 mod carve;
 mod cast;
@@ -34,6 +35,7 @@ pub mod simd;
 pub mod through_c;
 
 pub use abi::*;
+pub use build_jobs::{CorayKdRunJob, CorayKdRunJobs};
 pub use bvh::*;
 pub use cast::*;
 pub use handle::{CorayBvh, CorayKdTree, CorayProj};
@@ -43,7 +45,7 @@ pub use proj::*;
 /// Major version of the C ABI: changes only with an incompatible change.
 pub const CORAY_VERSION_MAJOR: u32 = 1;
 /// Minor version: new functions or struct fields, compatible.
-pub const CORAY_VERSION_MINOR: u32 = 0;
+pub const CORAY_VERSION_MINOR: u32 = 1;
 /// Patch version: fixes only.
 pub const CORAY_VERSION_PATCH: u32 = 0;
 
@@ -165,6 +167,6 @@ mod tests {
             super::CORAY_VERSION_PATCH
         );
         assert_eq!(v, want);
-        assert_eq!(super::coray_version(), 1 << 16);
+        assert_eq!(super::coray_version(), 1 << 16 | 1 << 8);
     }
 }

@@ -78,6 +78,11 @@ fn four_threads_trace_like_one() {
 }
 
 #[test]
+fn build_jobs_on_four_threads_make_the_one_thread_arena() {
+    assert!(run_program("build_jobs", &[]).contains("build_jobs: ok"));
+}
+
+#[test]
 fn documented_example_is_the_tested_one_and_runs() {
     let doc = std::fs::read_to_string(root().join("docs/c-api.md")).unwrap();
     let example = std::fs::read_to_string(root().join("c_tests/example.c")).unwrap();

@@ -2,7 +2,8 @@
 //! checks cannot: AddressSanitizer and UndefinedBehaviorSanitizer on the C
 //! side of every call, valgrind's memcheck over the whole process (the
 //! library's reads and writes included), and helgrind over the threads
-//! program (every structure shared between threads).
+//! program (every structure shared between threads) and the build_jobs
+//! program (a kd build's jobs writing one arena from four threads).
 mod support;
 
 use std::path::PathBuf;
@@ -10,10 +11,11 @@ use std::process::Command;
 use support::*;
 
 /// The programs that link coray alone, and what each prints on success.
-const PROGRAMS: [&str; 7] = [
+const PROGRAMS: [&str; 8] = [
     "api_contract",
     "canary",
     "threads",
+    "build_jobs",
     "lcts",
     "bvh",
     "proj",
@@ -103,7 +105,12 @@ fn c_programs_under_valgrind_memcheck() {
 
 #[test]
 fn threads_under_helgrind() {
-    let exe = build_with("threads", "hg", &["-O1"]);
-    let out = run_checked(valgrind("helgrind").arg(&exe), "threads under helgrind");
-    expect_ok("threads", &out);
+    for name in ["threads", "build_jobs"] {
+        let exe = build_with(name, "hg", &["-O1"]);
+        let out = run_checked(
+            valgrind("helgrind").arg(&exe),
+            &format!("{name} under helgrind"),
+        );
+        expect_ok(name, &out);
+    }
 }

@@ -148,6 +148,8 @@ pub struct Report {
     pub statuses: [u32; 10],
     /// Whether the corrupted arena validated.
     pub validated: bool,
+    /// `run_job` calls of a hostile kd job runner, per status code.
+    pub run_job: [u32; 10],
 }
 
 impl Report {
@@ -226,11 +228,101 @@ pub fn run(data: &[u8]) -> Report {
     let rays = rays(&mut inp);
     let mut rep = Report::default();
     match family % 3 {
-        0 => kd(&sd, &rays, &mut inp, how, family / 3 % 2 == 1, &mut rep),
+        0 => kd(
+            &sd,
+            &rays,
+            &mut inp,
+            how,
+            (family / 3 % 2 == 1, flags & 8 != 0),
+            &mut rep,
+        ),
         1 => bvh(&sd, &rays, &mut inp, how, family / 3, &mut rep),
         _ => proj(&sd, &rays, &mut inp, how, family / 3, &mut rep),
     }
     rep
+}
+
+/// A runner for `coray_kdtree_build_jobs` that does what the input says:
+/// job indices (out of range too), flags one byte short, the same job
+/// twice, jobs left to the build.
+struct HostileRunner<'a> {
+    inp: Input<'a>,
+    report: Report,
+}
+
+/// The `run_jobs` of [`HostileRunner`].
+///
+/// # Safety
+/// `ctx` is a live `HostileRunner`; the rest as `CorayKdRunJobs` says.
+unsafe extern "C" fn hostile_run_jobs(
+    ctx: *mut c_void,
+    job_count: usize,
+    flags_bytes: usize,
+    run_job: CorayKdRunJob,
+    jobs: *mut c_void,
+) {
+    // SAFETY: the harness passes its HostileRunner as ctx.
+    let r = unsafe { &mut *ctx.cast::<HostileRunner>() };
+    let mut flags = vec![0u8; flags_bytes + 1];
+    for _ in 0..r.inp.u8() % 48 {
+        let job = r.inp.u8() as usize % (job_count + 2);
+        let len = if r.inp.u8() % 4 == 0 {
+            flags_bytes.saturating_sub(1)
+        } else {
+            flags_bytes
+        };
+        // SAFETY: `jobs` and `run_job` are this call's; flags holds len bytes.
+        let s = unsafe { run_job(jobs, job, flags.as_mut_ptr(), len) };
+        assert!(
+            matches!(s, CorayStatus::Ok | CorayStatus::InvalidParameter),
+            "run_job {job} of {job_count} with {len} flag bytes: {s:?}"
+        );
+        r.report.note("kd run_job", s);
+    }
+}
+
+/// The kd build again with its jobs run as the input says: the arena must
+/// be the clean build's, byte for byte.
+fn kd_jobs(
+    scene: &CorayScene,
+    params: &CorayKdParams,
+    (clean, arena_bytes): (&[Block], usize),
+    scratch_bytes: usize,
+    inp: &Input,
+    rep: &mut Report,
+) {
+    let mut arena = blocks(arena_bytes);
+    let mut scratch = blocks(scratch_bytes);
+    // The runner reads a copy of the input: the damage that follows sees
+    // the same bytes with or without this build.
+    let mut runner = HostileRunner {
+        inp: Input {
+            d: inp.d,
+            at: inp.at,
+        },
+        report: Report::default(),
+    };
+    // SAFETY: as the clean build; the runner keeps CorayKdRunJobs' contract
+    // (one thread, returns when its calls have) and lives through the call.
+    let s = unsafe {
+        coray_kdtree_build_jobs(
+            scene,
+            params,
+            arena.as_mut_ptr().cast(),
+            arena_bytes,
+            scratch.as_mut_ptr().cast(),
+            scratch_bytes,
+            core::ptr::null_mut(),
+            Some(hostile_run_jobs),
+            (&mut runner as *mut HostileRunner).cast(),
+        )
+    };
+    assert_eq!(rep.note("kd build jobs", s), CorayStatus::Ok);
+    rep.run_job = runner.report.statuses;
+    assert!(
+        as_bytes(&arena)[..arena_bytes] == as_bytes(clean)[..arena_bytes],
+        "the job build's arena differs from coray_kdtree_build's"
+    );
 }
 
 /// Checks the damaged arena's answers against the clean one's.
@@ -271,7 +363,7 @@ fn kd(
     rays: &[CorayRay],
     inp: &mut Input,
     how: Damage,
-    paper: bool,
+    (paper, jobs): (bool, bool),
     rep: &mut Report,
 ) {
     let scene = sd.scene();
@@ -304,6 +396,16 @@ fn kd(
     };
     if rep.note("kd build", s) != CorayStatus::Ok {
         return;
+    }
+    if jobs {
+        kd_jobs(
+            &scene,
+            &params,
+            (&arena, req.arena_bytes),
+            req.scratch_bytes,
+            inp,
+            rep,
+        );
     }
     let clean = open_kd(&arena, req.arena_bytes, &scene).expect("a clean build opens");
     // Each traversal against its own clean answers: the two agree on

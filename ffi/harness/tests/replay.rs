@@ -70,3 +70,27 @@ fn generated_inputs_run_clean() {
         "{validated} of {runs} validated"
     );
 }
+
+/// kd builds whose jobs a hostile runner drives (flag bit 3): indices out
+/// of range, short flags, jobs run twice or never. Each arena equals the
+/// clean build's (the harness asserts it); the misuse got its statuses.
+#[test]
+fn kd_builds_with_hostile_job_runners_match_the_clean_build() {
+    let mut g = SplitMix64(17);
+    let mut statuses = [0u32; 10];
+    for family in [0u8, 3] {
+        for flags in 8..16u8 {
+            for _ in 0..4 {
+                let mut data = vec![family, flags];
+                let len = 64 + g.below(400) as usize;
+                data.extend((0..len).map(|_| g.next_u64() as u8));
+                let r = run(&data);
+                for (s, n) in statuses.iter_mut().zip(r.run_job) {
+                    *s += n;
+                }
+            }
+        }
+    }
+    // Jobs ran (OK) and misuse was refused (INVALID_PARAMETER).
+    assert!(statuses[0] > 0 && statuses[4] > 0, "{statuses:?}");
+}
