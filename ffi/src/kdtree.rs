@@ -257,16 +257,19 @@ pub unsafe extern "C" fn coray_kdtree_build(
     scratch_bytes: usize,
     needed_bytes: *mut usize,
 ) -> CorayStatus {
-    // SAFETY: the caller's contract is build_kd's.
+    let none = core::ptr::null_mut();
+    // SAFETY: the caller's contract is coray_kdtree_build_jobs' with no runner.
     unsafe {
-        build_kd(
+        coray_kdtree_build_jobs(
             scene,
             params,
-            (arena, arena_bytes),
-            (scratch, scratch_bytes),
+            arena,
+            arena_bytes,
+            scratch,
+            scratch_bytes,
             needed_bytes,
             None,
-            core::ptr::null_mut(),
+            none,
         )
     }
 }
@@ -291,31 +294,6 @@ pub unsafe extern "C" fn coray_kdtree_build_jobs(
     arena_bytes: usize,
     scratch: *mut c_void,
     scratch_bytes: usize,
-    needed_bytes: *mut usize,
-    run_jobs: CorayKdRunJobs,
-    ctx: *mut c_void,
-) -> CorayStatus {
-    // SAFETY: the caller's contract is build_kd's.
-    unsafe {
-        build_kd(
-            scene,
-            params,
-            (arena, arena_bytes),
-            (scratch, scratch_bytes),
-            needed_bytes,
-            run_jobs,
-            ctx,
-        )
-    }
-}
-
-/// Both builds: `coray_kdtree_build`'s contract, and `run_jobs` (if any)
-/// is called as `CorayKdRunJobs` says.
-unsafe fn build_kd(
-    scene: *const CorayScene,
-    params: *const CorayKdParams,
-    (arena, arena_bytes): (*mut c_void, usize),
-    (scratch, scratch_bytes): (*mut c_void, usize),
     needed_bytes: *mut usize,
     run_jobs: CorayKdRunJobs,
     ctx: *mut c_void,
