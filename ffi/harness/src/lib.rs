@@ -13,7 +13,11 @@
 //! - nothing returns late (the fuzzer's timeout);
 //! - when validate says OK, every trace on that arena answers as the
 //!   clean build does (the same primitive and t, or a tie of two
-//!   primitives at one t), and an R-tree update on it keeps it valid.
+//!   primitives at one t), and an R-tree update on it keeps it valid;
+//! - a kd build whose jobs a runner drives from the input (flag bit 3:
+//!   indices out of range, short flags, repeats, jobs never run) writes the
+//!   clean build's arena, byte for byte, and refuses each misuse with a
+//!   status.
 
 use coray::tolerance::near_tie;
 use coray_ffi::*;
