@@ -17,30 +17,25 @@ pub(crate) fn ordered_bits(x: f32) -> u32 {
 }
 
 /// Sorts `items` by `key`, stably (items with equal keys keep their
-/// order): a least-significant-digit radix sort over the key's low
-/// `bytes` bytes, one a pass, that skips the bytes every key shares.
-/// `spare` holds at least as many items. O(n) per pass, against the
-/// O(n log n) comparisons (each loading two keys) of a comparison sort.
-pub(crate) fn radix_sort_by_key<T: Copy>(
-    items: &mut [T],
-    spare: &mut [T],
-    bytes: u32,
-    key: impl Fn(&T) -> u64,
-) {
+/// order): a least-significant-digit radix sort, one byte a pass, that
+/// skips the bytes every key shares. `spare` holds at least as many items.
+/// O(n) per pass, against the O(n log n) comparisons (each loading two
+/// keys) of a comparison sort.
+pub(crate) fn radix_sort_by_key(items: &mut [u32], spare: &mut [u32], key: impl Fn(u32) -> u32) {
     let n = items.len();
     let spare = &mut spare[..n];
     // Passes alternate between the two slices; `in_spare` says where the
     // items are now.
     let mut in_spare = false;
-    for shift in (0..bytes).map(|b| 8 * b) {
+    for shift in [0u32, 8, 16, 24] {
         let (from, to) = if in_spare {
             (&mut *spare, &mut *items)
         } else {
             (&mut *items, &mut *spare)
         };
-        let digit = |x: &T| (key(x) >> shift) as usize & 0xff;
+        let digit = |x: u32| (key(x) >> shift) as usize & 0xff;
         let mut start = [0usize; 256];
-        for x in from.iter() {
+        for &x in from.iter() {
             start[digit(x)] += 1;
         }
         if start.contains(&n) {
@@ -52,9 +47,9 @@ pub(crate) fn radix_sort_by_key<T: Copy>(
             *s = sum;
             sum += c;
         }
-        for x in from.iter() {
+        for &x in from.iter() {
             let d = digit(x);
-            to[start[d]] = *x;
+            to[start[d]] = x;
             start[d] += 1;
         }
         in_spare = !in_spare;
@@ -74,20 +69,19 @@ mod tests {
     #[test]
     fn radix_sort_is_a_stable_sort_by_key() {
         let mut g = crate::rng::SplitMix64(11);
-        // (items, key mask, key bytes): one pass left (an odd count, so the
-        // items end in the spare slice and come back), all four, eight.
-        let cases: [(usize, u64, u32); 8] = [
-            (1000, 7, 4),
-            (1000, u32::MAX as u64, 4),
-            (777, 0xff00, 4),
-            (50, 0, 4),
-            (1, 5, 4),
-            (0, 5, 4),
-            (1000, u64::MAX, 8),
-            (999, 0xff00_0000_00ff_0000, 8),
+        // (items, key mask): one pass left (an odd count, so the items end
+        // in the spare slice and come back), three, all four, none.
+        let cases: [(usize, u32); 7] = [
+            (1000, 7),
+            (1000, u32::MAX),
+            (777, 0xff00),
+            (999, 0xff00_ffff),
+            (50, 0),
+            (1, 5),
+            (0, 5),
         ];
-        for (n, mask, bytes) in cases {
-            let keys: [u64; 1000] = core::array::from_fn(|_| g.next_u64() & mask);
+        for (n, mask) in cases {
+            let keys: [u32; 1000] = core::array::from_fn(|_| g.next_u64() as u32 & mask);
             // Items in scrambled order, so stability is visible.
             let mut items: [u32; 1000] = core::array::from_fn(|i| (i as u32 * 7919) % 1000);
             // Stable by construction: the key, then the position.
@@ -95,7 +89,7 @@ mod tests {
             at[..n].sort_unstable_by_key(|&i| (keys[items[i] as usize], i));
             let want: [u32; 1000] = core::array::from_fn(|i| items[at[i]]);
             let mut spare = [0u32; 1000];
-            radix_sort_by_key(&mut items[..n], &mut spare, bytes, |&p| keys[p as usize]);
+            radix_sort_by_key(&mut items[..n], &mut spare, |p| keys[p as usize]);
             assert_eq!(items[..n], want[..n], "n {n} mask {mask:x}");
         }
     }

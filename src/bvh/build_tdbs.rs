@@ -101,7 +101,7 @@ pub(crate) fn build<'a>(
     let mut order = [by_x, by_y, by_z];
     for (o, c) in order.iter_mut().zip(&centres) {
         o.copy_from_slice(&refs[..n]);
-        crate::sort_key::radix_sort_by_key(o, right_side, 4, |&p| c[p as usize] as u64);
+        crate::sort_key::radix_sort_by_key(o, right_side, |p| c[p as usize]);
     }
     let pair = |i: usize| i.div_ceil(2);
     level[0] = 0;

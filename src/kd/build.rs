@@ -266,7 +266,7 @@ pub fn build_depth_first<'a>(
         bounds: root.voxel,
         prims: root.prims,
     };
-    let storage = b.into_storage();
+    let (storage, _, _) = b.into_parts();
     Ok(made.into_tree(scene, storage))
 }
 
@@ -370,11 +370,6 @@ impl<'s, 'a> Builder<'s, 'a> {
     /// references pending, as [`Self::root_task`] starts the whole scene.
     pub(super) fn as_job(&mut self, prims: usize) {
         self.frontier_refs = prims;
-    }
-
-    /// The storage the builder was given back.
-    pub(super) fn into_storage(self) -> KdStorage<'a> {
-        self.into_parts().0
     }
 
     /// The storage, the events and the flags the builder was given back.

@@ -385,15 +385,10 @@ impl<'s, 'a> KdBuild<'s, 'a> {
                 reruns,
                 prim_flags: &mut *prim_flags,
             };
-            layout.assemble(top_nodes)
+            layout.assemble(top_nodes, root_voxel, root_prims)
         });
         match made {
             Some(made) => {
-                let made = Made {
-                    bounds: root_voxel,
-                    prims: root_prims,
-                    ..made
-                };
                 report.one_pass = false;
                 Ok((made.into_tree(&scene, storage), report))
             }
@@ -483,8 +478,9 @@ impl Layout<'_, '_, '_> {
     /// build's layout: node pairs, leaves and references in depth-first
     /// preorder, left first. Everything moves down (a share starts at or
     /// after where its contents end up), so each copy runs forward in
-    /// place. None when a job fails again.
-    fn assemble(&mut self, top_nodes: usize) -> Option<Made> {
+    /// place. None when a job fails again. `bounds` and `prims` are the
+    /// root's.
+    fn assemble(&mut self, top_nodes: usize, bounds: Aabb, prims: usize) -> Option<Made> {
         let mut top = [KdNode::default(); 2 * KD_MAX_JOBS];
         top[..top_nodes].copy_from_slice(&self.storage.nodes[..top_nodes]);
         // (top node, its slot in the finished tree)
@@ -527,8 +523,8 @@ impl Layout<'_, '_, '_> {
             ref_count: at.re,
             depth,
             truncated: false,
-            bounds: Aabb::EMPTY,
-            prims: 0,
+            bounds,
+            prims,
         })
     }
 
