@@ -9,7 +9,7 @@ use coray::arena::ARENA_ALIGN;
 use core::mem::{align_of, size_of};
 
 /// Types that may be viewed in caller memory: `repr(C)`, fields of `u8`,
-/// `u32`, `f32` (and arrays of them) only, no padding, alignment at most
+/// `u32`, `u64`, `f32` (and arrays of them) only, no padding, alignment at most
 /// [`ARENA_ALIGN`]. Every bit pattern is then a value, so reading
 /// arbitrary caller bytes as `T` is defined (whether the values make a
 /// structure is `validate`'s question).
@@ -30,7 +30,7 @@ pub(crate) unsafe trait Versioned: Copy + Default {
     const SIZE_1_0: usize;
 }
 
-// SAFETY (all impls): each type is repr(C) with u32/f32/u8 fields (or
+// SAFETY (all impls): each type is repr(C) with u64/u32/f32/u8 fields (or
 // arrays of them) only; the asserts below prove there is no padding and
 // the alignment is at most 16.
 unsafe impl Plain for u8 {}
@@ -57,7 +57,7 @@ const _: () = {
     assert!(size_of::<KdNode>() == 8 && align_of::<KdNode>() <= ARENA_ALIGN);
     assert!(size_of::<KdLeaf>() == 8);
     assert!(size_of::<KdRopes>() == 48);
-    assert!(size_of::<KdEvent>() == 8);
+    assert!(size_of::<KdEvent>() == 8 && align_of::<KdEvent>() <= ARENA_ALIGN);
     assert!(size_of::<KdStackItem>() == 8 && align_of::<KdStackItem>() == 4);
     assert!(size_of::<layout::KdArenaHeader>() == 108);
     assert!(size_of::<coray::Sphere>() == 16 && align_of::<coray::Sphere>() == 4);

@@ -14,14 +14,16 @@ use crate::geom::{Aabb, Scene};
 use crate::Error;
 
 /// One split event: a primitive's clipped box starts, ends or lies flat at
-/// `pos` on some axis. `word` is `prim << 2 | kind`.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+/// some position on some axis, stored as its sweep key: the position's
+/// ordered bits (high 32 bits), the kind (bits 30 and 31: end < planar <
+/// start), the primitive (low 30 bits). Events sort by this one integer
+/// (position, then kind, then primitive, which makes the build
+/// deterministic), and a sweep finds the events of one position and kind
+/// by one compare of `key >> 30`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord)]
 #[repr(C)]
 pub struct KdEvent {
-    /// Position on the event's axis.
-    pub pos: f32,
-    /// Primitive index shifted left by 2, kind in the low bits.
-    pub word: u32,
+    key: u64,
 }
 
 const END: u32 = 0;
@@ -33,31 +35,39 @@ const LEFT: u8 = 1;
 const RIGHT: u8 = 2;
 
 impl KdEvent {
+    /// Primitives fit in 30 bits (the scene limit is below).
     fn new(pos: f32, prim: usize, kind: u32) -> KdEvent {
-        // `+ 0.0` turns -0.0 into 0.0, so equal positions sort as equal.
+        // `+ 0.0` turns -0.0 into 0.0, so equal positions have equal bits.
+        let bits = crate::sort_key::ordered_bits(pos + 0.0);
         KdEvent {
-            pos: pos + 0.0,
-            word: ((prim as u32) << 2) | kind,
+            key: (bits as u64) << 32 | (kind as u64) << 30 | (prim as u64 & PRIM_MASK),
         }
     }
-    #[inline]
-    fn prim(&self) -> usize {
-        (self.word >> 2) as usize
-    }
-    #[inline]
-    fn kind(&self) -> u32 {
-        self.word & 3
-    }
-    /// Sweep order as one integer: position, then end < planar < start,
-    /// then primitive (which makes the build deterministic). Events hold
-    /// no -0.0 (see [`KdEvent::new`]), so the ordered bits order as the
-    /// positions compare; primitives fit in 30 bits.
+    /// The position's ordered bits: they order as the positions compare.
     #[inline(always)]
-    fn key(&self) -> u64 {
-        let pos = crate::sort_key::ordered_bits(self.pos);
-        (pos as u64) << 32 | ((self.word & 3) << 30 | self.word >> 2) as u64
+    fn pos_bits(&self) -> u32 {
+        (self.key >> 32) as u32
+    }
+    #[inline(always)]
+    fn pos(&self) -> f32 {
+        crate::sort_key::from_ordered_bits(self.pos_bits())
+    }
+    #[inline(always)]
+    fn prim(&self) -> usize {
+        (self.key & PRIM_MASK) as usize
+    }
+    #[inline(always)]
+    fn kind(&self) -> u32 {
+        (self.key >> 30) as u32 & 3
+    }
+    /// Position and kind: what the events of one sweep step share.
+    #[inline(always)]
+    fn group(&self) -> u64 {
+        self.key >> 30
     }
 }
+
+const PRIM_MASK: u64 = (1 << 30) - 1;
 
 /// A node waiting to be built: its events are `events[start..]`, `counts[a]`
 /// of them on axis `a`, in axis order.
@@ -414,7 +424,7 @@ impl<'s, 'a> Builder<'s, 'a> {
                     push_events(self.events, &mut at, p, &b, axis);
                 }
             }
-            self.events[s..at].sort_unstable_by_key(KdEvent::key);
+            self.events[s..at].sort_unstable();
             *count = at - s;
         }
         Task {
@@ -530,9 +540,21 @@ impl<'s, 'a> Builder<'s, 'a> {
         let mut consider = |pos: f32, nl: usize, nr: usize, planars: usize| {
             let pl = (area_along::<AXIS>(extent, pos - lo) * inv_area) as f32;
             let pr = (area_along::<AXIS>(extent, hi - pos) * inv_area) as f32;
-            let cl = cost(pl, pr, nl + planars, nr);
-            let cr = cost(pl, pr, nl, nr + planars);
-            let (c, planar_left) = if cl <= cr { (cl, true) } else { (cr, false) };
+            // Planar primitives go to the cheaper side; with none, both
+            // sides cost the same: one evaluation (`cl <= cr` is then
+            // `!c.is_nan()`).
+            let (c, planar_left) = if planars == 0 {
+                let c = cost(pl, pr, nl, nr);
+                (c, !c.is_nan())
+            } else {
+                let cl = cost(pl, pr, nl + planars, nr);
+                let cr = cost(pl, pr, nl, nr + planars);
+                if cl <= cr {
+                    (cl, true)
+                } else {
+                    (cr, false)
+                }
+            };
             if best.is_none_or(|b| c < b.cost) {
                 *best = Some(Split {
                     axis: AXIS,
@@ -545,21 +567,20 @@ impl<'s, 'a> Builder<'s, 'a> {
         let ev = &self.events[s..e];
         let (mut nl, mut nr) = (0usize, node.prims);
         let mut i = 0;
+        // The events of the group `g` (a position and a kind) from `i` on.
+        let count = |i: &mut usize, g: u64| {
+            let from = *i;
+            while *i < ev.len() && ev[*i].group() == g {
+                *i += 1;
+            }
+            *i - from
+        };
         while i < ev.len() {
-            let p = ev[i].pos;
-            let (mut ends, mut planars, mut starts) = (0, 0, 0);
-            while i < ev.len() && ev[i].pos == p && ev[i].kind() == END {
-                ends += 1;
-                i += 1;
-            }
-            while i < ev.len() && ev[i].pos == p && ev[i].kind() == PLANAR {
-                planars += 1;
-                i += 1;
-            }
-            while i < ev.len() && ev[i].pos == p && ev[i].kind() == START {
-                starts += 1;
-                i += 1;
-            }
+            let p = ev[i].pos();
+            let here = (ev[i].pos_bits() as u64) << 2;
+            let ends = count(&mut i, here | END as u64);
+            let planars = count(&mut i, here | PLANAR as u64);
+            let starts = count(&mut i, here | START as u64);
             nr -= planars + ends;
             if p > lo && p < hi {
                 consider(p, nl, nr, planars);
@@ -611,12 +632,15 @@ impl<'s, 'a> Builder<'s, 'a> {
             let prim = self.events[i].prim();
             self.flags[prim] = BOTH;
         }
+        // Positions compare as their ordered bits (events hold no -0.0).
+        let pb = crate::sort_key::ordered_bits(p + 0.0);
         for i in ks..ke {
             let ev = self.events[i];
+            let at = ev.pos_bits();
             let side = match ev.kind() {
-                END if ev.pos <= p => LEFT,
-                START if ev.pos >= p => RIGHT,
-                PLANAR if ev.pos < p || (ev.pos == p && split.planar_left) => LEFT,
+                END if at <= pb => LEFT,
+                START if at >= pb => RIGHT,
+                PLANAR if at < pb || (at == pb && split.planar_left) => LEFT,
                 PLANAR => RIGHT,
                 _ => continue,
             };
@@ -700,8 +724,8 @@ impl<'s, 'a> Builder<'s, 'a> {
             let (s, e) = task.axis_range(axis);
             let lnew = top + axis * s2;
             let rnew = top + 6 * straddling + axis * s2;
-            self.events[lnew..lnew + tl[axis]].sort_unstable_by_key(KdEvent::key);
-            self.events[rnew..rnew + tr[axis]].sort_unstable_by_key(KdEvent::key);
+            self.events[lnew..lnew + tl[axis]].sort_unstable();
+            self.events[rnew..rnew + tr[axis]].sort_unstable();
             let (l0, r0) = (lat, rat);
             self.merge(
                 (s, e),
@@ -768,7 +792,7 @@ impl<'s, 'a> Builder<'s, 'a> {
             };
             // New events that sort before this old one go first (an old
             // event goes before a new one it ties with).
-            while *j < end && ev.key() > self.events[*j].key() {
+            while *j < end && ev > self.events[*j] {
                 self.events[*out] = self.events[*j];
                 *j += 1;
                 *out += 1;
@@ -815,15 +839,15 @@ mod tests {
             }
         }
         let reference = |a: &KdEvent, b: &KdEvent| {
-            a.pos
-                .partial_cmp(&b.pos)
+            a.pos()
+                .partial_cmp(&b.pos())
                 .unwrap()
                 .then(a.kind().cmp(&b.kind()))
                 .then(a.prim().cmp(&b.prim()))
         };
         for a in &events {
             for b in &events {
-                assert_eq!(a.key().cmp(&b.key()), reference(a, b), "{a:?} {b:?}");
+                assert_eq!(a.cmp(b), reference(a, b), "{a:?} {b:?}");
             }
         }
     }
