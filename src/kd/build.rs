@@ -408,24 +408,28 @@ impl<'s, 'a> Builder<'s, 'a> {
         let n = self.scene.prim_count();
         let mut voxel = Aabb::EMPTY;
         let mut valid = 0;
+        // One bounds pass: axis `a`'s events go to their own region of 2n
+        // slots from 2n * a (the scratch holds at least 6n events), each
+        // region is sorted, then the three are closed up.
+        let mut at = [0, 2 * n, 4 * n];
         for p in 0..n {
             if let Some(b) = self.scene.prim_bounds(p) {
                 voxel = voxel.union(&b);
                 valid += 1;
+                for (axis, at) in at.iter_mut().enumerate() {
+                    push_events(self.events, at, p, &b, axis);
+                }
             }
         }
         self.frontier_refs = valid;
-        let mut at = 0;
         let mut counts = [0; 3];
+        let mut end = 0;
         for (axis, count) in counts.iter_mut().enumerate() {
-            let s = at;
-            for p in 0..n {
-                if let Some(b) = self.scene.prim_bounds(p) {
-                    push_events(self.events, &mut at, p, &b, axis);
-                }
-            }
-            self.events[s..at].sort_unstable();
-            *count = at - s;
+            let region = 2 * n * axis..at[axis];
+            self.events[region.clone()].sort_unstable();
+            self.events.copy_within(region.clone(), end);
+            *count = region.len();
+            end += *count;
         }
         Task {
             node: 0,
