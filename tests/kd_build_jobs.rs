@@ -259,3 +259,56 @@ fn a_job_given_too_few_flags_is_refused() {
     let t = b.finish().unwrap();
     t.validate().unwrap();
 }
+
+/// FNV-1a over a tree's words: nodes, leaves, ropes and references.
+fn tree_digest(m: &Made) -> u64 {
+    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    let mut word = |w: u32| {
+        for b in w.to_le_bytes() {
+            h = (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    };
+    m.nodes.iter().for_each(|n| {
+        word(n.word);
+        word(n.data);
+    });
+    m.leaves.iter().for_each(|l| {
+        word(l.first_ref);
+        word(l.ref_count);
+    });
+    for r in &m.ropes {
+        r.neighbor.iter().for_each(|&w| word(w));
+        r.min.iter().chain(&r.max).for_each(|x| word(x.to_bits()));
+    }
+    m.refs.iter().for_each(|&w| word(w));
+    h
+}
+
+/// The trees themselves are pinned: a change that means to make the build
+/// faster must leave every tree as it was (these digests are of the trees
+/// of a159a8c, checked there). A change that means to make other trees updates them,
+/// and shows in its message what the new trees trace like.
+#[test]
+fn spd_trees_are_pinned() {
+    let pinned: [(&str, u64, u64); 8] = [
+        ("balls", 0x5eb074aab3000317, 0x0d62d546331a9f41),
+        ("gears", 0xaaf81c460ae905c3, 0x7c3ee7c8ba72459f),
+        ("lattice", 0x5fa195163e997d43, 0x757537e532e584d4),
+        ("mount", 0xeffa129500a72c0c, 0x1a3331569486fb64),
+        ("rings", 0xc5ea4dd6484d4fe4, 0xf5de540b458671ef),
+        ("teapot", 0x5d2526858a2cf55f, 0x691424b4c8d73566),
+        ("tetra", 0x117416b91fc79c06, 0x117416b91fc79c06),
+        ("tree", 0xb679914e1875e3ca, 0xd7e19bcedf884d9f),
+    ];
+    let mut got = Vec::new();
+    for &(name, _, _) in &pinned {
+        let mesh = spd_mesh(name, None);
+        let scene = mesh.scene();
+        let digest = |params: KdParams| {
+            let req = kd::requirements(scene.prim_count(), &params);
+            tree_digest(&depth_first(&scene, &params, &req))
+        };
+        got.push((name, digest(KdParams::auto()), digest(KdParams::paper())));
+    }
+    assert_eq!(got, pinned, "digests (name, auto, paper)");
+}

@@ -117,6 +117,10 @@ struct Split {
     pos: f32,
     planar_left: bool,
     cost: f32,
+    /// Primitives on each side as the cost counted them: 0 when that side
+    /// is empty space (no primitive classifies into it).
+    left: usize,
+    right: usize,
 }
 
 /// Appends the events of box `b` on `axis` at `events[*at..]`.
@@ -560,11 +564,14 @@ impl<'s, 'a> Builder<'s, 'a> {
                 }
             };
             if best.is_none_or(|b| c < b.cost) {
+                let planars_left = if planar_left { planars } else { 0 };
                 *best = Some(Split {
                     axis: AXIS,
                     pos,
                     planar_left,
                     cost: c,
+                    left: nl + planars_left,
+                    right: nr + planars - planars_left,
                 });
             }
         };
@@ -629,6 +636,9 @@ impl<'s, 'a> Builder<'s, 'a> {
             return None;
         }
         let (k, p) = (split.axis, split.pos);
+        if split.left == 0 || split.right == 0 {
+            return self.cut_empty_space(task, &split);
+        }
 
         // Classify from the split axis' events.
         let (ks, ke) = task.axis_range(k);
@@ -771,6 +781,64 @@ impl<'s, 'a> Builder<'s, 'a> {
             ref_budget: task.ref_budget.saturating_sub(left_budget),
         };
         Some((left, right))
+    }
+
+    /// [`Self::try_split`] for a plane with no primitive on one side: the
+    /// other child keeps the node's events as they lie (nothing straddles,
+    /// nothing is classified, clipped or merged), so only the node and the
+    /// children are written. Same children, same checks and the same tree
+    /// as the general path; a top of empty-space cuts (each over all the
+    /// events) stays cheap.
+    fn cut_empty_space(&mut self, task: &Task, split: &Split) -> Option<(Task, Task)> {
+        let n = task.prims;
+        let total = task.total();
+        // The general path's room check, for no straddling primitive.
+        if task.start + total + 6 * n > self.event_limit {
+            self.truncated = true;
+            return None;
+        }
+        let fits = if self.fair {
+            n <= task.ref_budget
+        } else {
+            self.frontier_refs <= self.refs.len()
+        };
+        if !fits {
+            self.truncated = true;
+            return None;
+        }
+        let (k, p) = (split.axis, split.pos);
+        let c = self.node_top as u32;
+        self.node_top += 2;
+        self.nodes[task.node as usize] = KdNode::interior(k, p, c);
+        // The general path's budgets: a left child gets its references and
+        // all the spare, a right one what the left leaves.
+        let full_budget = if split.left == 0 {
+            task.ref_budget
+        } else {
+            task.ref_budget.max(n)
+        };
+        let full = |node: u32, voxel: Aabb| Task {
+            node,
+            depth: task.depth + 1,
+            voxel,
+            ref_budget: full_budget,
+            ..*task
+        };
+        let empty = |node: u32, voxel: Aabb| Task {
+            node,
+            depth: task.depth + 1,
+            voxel,
+            start: task.start + if split.left == 0 { total } else { 0 },
+            counts: [0; 3],
+            prims: 0,
+            ref_budget: 0,
+        };
+        let (lv, rv) = (with_max(&task.voxel, k, p), with_min(&task.voxel, k, p));
+        Some(if split.left == 0 {
+            (empty(c, lv), full(c + 1, rv))
+        } else {
+            (full(c, lv), empty(c + 1, rv))
+        })
     }
 
     /// Splits the old events in `[s, e)` by their primitive's side and
