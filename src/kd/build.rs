@@ -60,11 +60,6 @@ impl KdEvent {
     fn kind(&self) -> u32 {
         (self.key >> 30) as u32 & 3
     }
-    /// Position and kind: what the events of one sweep step share.
-    #[inline(always)]
-    fn group(&self) -> u64 {
-        self.key >> 30
-    }
 }
 
 const PRIM_MASK: u64 = (1 << 30) - 1;
@@ -578,20 +573,15 @@ impl<'s, 'a> Builder<'s, 'a> {
         let ev = &self.events[s..e];
         let (mut nl, mut nr) = (0usize, node.prims);
         let mut i = 0;
-        // The events of the group `g` (a position and a kind) from `i` on.
-        let count = |i: &mut usize, g: u64| {
-            let from = *i;
-            while *i < ev.len() && ev[*i].group() == g {
-                *i += 1;
-            }
-            *i - from
-        };
         while i < ev.len() {
-            let p = ev[i].pos();
-            let here = (ev[i].pos_bits() as u64) << 2;
-            let ends = count(&mut i, here | END as u64);
-            let planars = count(&mut i, here | PLANAR as u64);
-            let starts = count(&mut i, here | START as u64);
+            // Every event at this position: its ends, planars and starts.
+            let (p, bits) = (ev[i].pos(), ev[i].pos_bits());
+            let mut kinds = [0usize; 4];
+            while i < ev.len() && ev[i].pos_bits() == bits {
+                kinds[ev[i].kind() as usize] += 1;
+                i += 1;
+            }
+            let [ends, planars, starts, _] = kinds;
             nr -= planars + ends;
             if p > lo && p < hi {
                 consider(p, nl, nr, planars);
@@ -640,37 +630,35 @@ impl<'s, 'a> Builder<'s, 'a> {
             return self.cut_empty_space(task, &split);
         }
 
-        // Classify from the split axis' events.
+        // Classify and count from the split axis' events, in one pass: a
+        // primitive's start comes before its end (it lies below it), so a
+        // start below the plane marks it straddling until an end at or
+        // below the plane makes it left only. Positions compare as their
+        // ordered bits (events hold no -0.0).
         let (ks, ke) = task.axis_range(k);
-        for i in ks..ke {
-            let prim = self.events[i].prim();
-            self.flags[prim] = BOTH;
-        }
-        // Positions compare as their ordered bits (events hold no -0.0).
         let pb = crate::sort_key::ordered_bits(p + 0.0);
-        for i in ks..ke {
-            let ev = self.events[i];
-            let at = ev.pos_bits();
-            let side = match ev.kind() {
-                END if at <= pb => LEFT,
-                START if at >= pb => RIGHT,
-                PLANAR if at < pb || (at == pb && split.planar_left) => LEFT,
-                PLANAR => RIGHT,
-                _ => continue,
-            };
-            self.flags[ev.prim()] = side;
-        }
         let mut straddling = 0;
         let (mut left_only, mut right_only) = (0, 0);
         for i in ks..ke {
             let ev = self.events[i];
-            if ev.kind() != END {
-                match self.flags[ev.prim()] {
-                    LEFT => left_only += 1,
-                    RIGHT => right_only += 1,
-                    _ => straddling += 1,
+            let at = ev.pos_bits();
+            let side = match ev.kind() {
+                START if at >= pb => RIGHT,
+                START => BOTH,
+                END if at <= pb => {
+                    straddling -= 1;
+                    LEFT
                 }
+                END => continue,
+                _ if at < pb || (at == pb && split.planar_left) => LEFT,
+                _ => RIGHT,
+            };
+            match side {
+                LEFT => left_only += 1,
+                RIGHT => right_only += 1,
+                _ => straddling += 1,
             }
+            self.flags[ev.prim()] = side;
         }
 
         // New events of the straddling primitives, clipped into each child.
