@@ -257,7 +257,6 @@ pub unsafe extern "C" fn coray_kdtree_build(
     scratch_bytes: usize,
     needed_bytes: *mut usize,
 ) -> CorayStatus {
-    let none = core::ptr::null_mut();
     // SAFETY: the caller's contract is coray_kdtree_build_jobs' with no runner.
     unsafe {
         coray_kdtree_build_jobs(
@@ -269,7 +268,7 @@ pub unsafe extern "C" fn coray_kdtree_build(
             scratch_bytes,
             needed_bytes,
             None,
-            none,
+            core::ptr::null_mut(),
         )
     }
 }

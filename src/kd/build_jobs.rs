@@ -3,8 +3,8 @@
 //!
 //! [`build_begin`] builds the top of the tree on the calling thread, down to
 //! nodes of about a quarter of the primitives at most (at most
-//! [`KD_MAX_JOBS`] of them), and makes each such node's subtree a job: its events move into
-//! a region of the event scratch of its own, and it gets its own shares of
+//! [`KD_MAX_JOBS`] of them), and makes each such node's subtree a job: its
+//! events move into a region of the event scratch of its own, and it gets its own shares of
 //! the node, leaf, rope and reference slices, in proportion to its size.
 //! Any thread may run any job ([`KdJob::run`], with a flag slice of its
 //! own); a job writes only its shares. [`KdBuild::finish`] runs the jobs
@@ -38,12 +38,15 @@ use crate::Error;
 /// Most jobs one build makes.
 pub const KD_MAX_JOBS: usize = 32;
 
-/// A node becomes a job once it has at most a quarter of the scene's
-/// primitives, plus this fraction of them for those that straddle the top
-/// splits (SPD rings' third level has 2124 of 8402: without the slack it
-/// would be split on one thread too). A few top levels, so the part of the
+/// A node becomes a job once it has at most this fraction of the scene's
+/// primitives (plus [`JOB_SLACK`]): a few top levels, so the part of the
 /// build that runs on one thread stays small, and jobs enough to balance
 /// two to eight threads.
+const JOB_FRACTION: usize = 4;
+
+/// The slack on [`JOB_FRACTION`], as a fraction of the primitives, for
+/// those that straddle the top splits (SPD rings' third level has 2124 of
+/// 8402: without it that level would be split on one thread too).
 const JOB_SLACK: usize = 16;
 
 /// Below this many primitives a node is a job whatever the fraction.
@@ -128,7 +131,7 @@ pub fn build_begin<'s, 'a>(
     check_build(scene, params, &storage, &scratch)?;
     let mut b = Builder::new(*scene, params, storage, scratch.events, scratch.prim_flags);
     let root = b.root_task();
-    let job_prims = (root.prims / 4 + root.prims / JOB_SLACK).max(MIN_JOB_PRIMS);
+    let job_prims = (root.prims / JOB_FRACTION + root.prims / JOB_SLACK).max(MIN_JOB_PRIMS);
     let mut specs = [JobSpec {
         task: root,
         events: Share::default(),
