@@ -37,7 +37,7 @@ int main(void) {
 
     /* Version and status strings: every code has one, unknown ones too. */
     CHECK(coray_version() == ((CORAY_VERSION_MAJOR << 16) | (CORAY_VERSION_MINOR << 8) | CORAY_VERSION_PATCH));
-    for (s = -1; s <= 10; s++) CHECK(coray_status_str(s) != NULL && strlen(coray_status_str(s)) > 0);
+    for (s = -1; s <= 11; s++) CHECK(coray_status_str(s) != NULL && strlen(coray_status_str(s)) > 0);
     CHECK(strcmp(coray_status_str(CORAY_STATUS_OK), "ok") == 0);
 
     /* Requirements. */
@@ -57,6 +57,11 @@ int main(void) {
         CHECK_STATUS(coray_kdtree_requirements(n, &bad, &req), CORAY_STATUS_INVALID_PARAMETER);
         bad = p;
         bad.max_depth = 61;
+        CHECK_STATUS(coray_kdtree_requirements(n, &bad, &req), CORAY_STATUS_INVALID_PARAMETER);
+        /* omit_ropes (1.2): AUTO leaves the ropes out, PAPER keeps them; 0 or 1 only. */
+        CHECK(p.omit_ropes == 1 && coray_kdtree_params_default(CORAY_KD_PRESET_PAPER).omit_ropes == 0);
+        bad = p;
+        bad.omit_ropes = 2;
         CHECK_STATUS(coray_kdtree_requirements(n, &bad, &req), CORAY_STATUS_INVALID_PARAMETER);
         bad = coray_kdtree_params_default(99);
         CHECK(bad.struct_size == 0);
@@ -137,6 +142,24 @@ int main(void) {
     CHECK_STATUS(coray_kdtree_intersect(&tree, CORAY_TRAVERSAL_HIERARCHICAL, rays, hits, 512, &stack, sizeof stack, &st), CORAY_STATUS_OK);
     CHECK(st.rays == 512 && st.traversal_steps == st.interior_steps + st.leaf_steps && st.prim_tests > 0);
     CHECK(same_hits(hits, hits2, 512));
+    /* The same tree with ropes: the same nodes, leaves and references, 48
+     * bytes more per leaf, the same hits by either traversal. */
+    {
+        CorayKdParams pr = p;
+        CorayRequirements rr = requirements0();
+        CorayKdTreeInfo ri = info;
+        Tree roped;
+        pr.omit_ropes = 0;
+        CHECK_STATUS(coray_kdtree_requirements(n, &pr, &rr), CORAY_STATUS_OK);
+        CHECK(rr.arena_min_bytes == req.arena_min_bytes + 48);
+        roped = tree_build_with(&ts.view, &pr);
+        CHECK_STATUS(coray_kdtree_info(&roped.tree, &ri), CORAY_STATUS_OK);
+        CHECK(ri.node_count == info.node_count && ri.leaf_count == info.leaf_count && ri.ref_count == info.ref_count);
+        CHECK(ri.arena_bytes_used == info.arena_bytes_used + 48 * (size_t)info.leaf_count);
+        CHECK_STATUS(coray_kdtree_intersect(&roped.tree, CORAY_TRAVERSAL_ROPES, rays, hits2, 512, &stack, sizeof stack, NULL), CORAY_STATUS_OK);
+        CHECK(same_hits(hits, hits2, 512));
+        free(roped.arena);
+    }
     {
         size_t nhit = 0;
         for (i = 0; i < 512; i++) nhit += hits[i].geom_id != CORAY_INVALID_ID;

@@ -220,8 +220,8 @@ typedef struct {
     CorayKdTree tree;
 } Tree;
 
-static inline Tree tree_build(const CorayScene *scene, CorayKdPreset preset) {
-    CorayKdParams p = coray_kdtree_params_default(preset);
+static inline Tree tree_build_with(const CorayScene *scene, const CorayKdParams *params) {
+    CorayKdParams p = *params;
     CorayRequirements req = requirements0();
     Tree t;
     void *scratch;
@@ -234,6 +234,19 @@ static inline Tree tree_build(const CorayScene *scene, CorayKdPreset preset) {
     free(scratch);
     CHECK_STATUS(coray_kdtree_open(t.arena, t.bytes, scene, &t.tree), CORAY_STATUS_OK);
     return t;
+}
+
+/* A tree with the preset's parameters (AUTO: no ropes, PAPER: ropes). */
+static inline Tree tree_build(const CorayScene *scene, CorayKdPreset preset) {
+    CorayKdParams p = coray_kdtree_params_default(preset);
+    return tree_build_with(scene, &p);
+}
+
+/* A tree with the preset's parameters and ropes, for rope traversal and casts. */
+static inline Tree tree_build_roped(const CorayScene *scene, CorayKdPreset preset) {
+    CorayKdParams p = coray_kdtree_params_default(preset);
+    p.omit_ropes = 0;
+    return tree_build_with(scene, &p);
 }
 
 static inline int finish(const char *name) {

@@ -164,6 +164,43 @@ int main(void) {
             /* 256 samples per side would count 2^32 segments in 32 bits: refused. */
             CHECK_STATUS(coray_kdtree_patch_visibility(&tree.tree, a, 3, b, 3, 256, 1e-4f, ps, pr_req.scratch_bytes, &stack, sizeof stack, &r, NULL), CORAY_STATUS_INVALID_PARAMETER);
         }
+        /* A tree without ropes (AUTO's default): the hierarchical cast runs,
+         * every scheme that walks ropes and the patch query are refused
+         * with NO_ROPES before writing anything; with ropes they run and
+         * give the hierarchical cast's hits. */
+        {
+            Tree plain = tree_build(&ts.view, CORAY_KD_PRESET_AUTO);
+            Tree roped = tree_build_roped(&ts.view, CORAY_KD_PRESET_AUTO);
+            CorayHit *plain_ref = malloc(n * sizeof(CorayHit));
+            float a[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+            float b[9] = {0, 0, 2, 1, 0, 2, 0, 1, 2};
+            CorayPatchResult r;
+            memset(&r, 0, sizeof r);
+            r.struct_size = sizeof r;
+            cp = coray_cast_params_default();
+            cp.scheme = CORAY_CAST_HIERARCHICAL;
+            CHECK_STATUS(coray_kdtree_cast_image(&plain.tree, &cam, &cp, NULL, 0, &stack, sizeof stack, plain_ref, NULL), CORAY_STATUS_OK);
+            for (scheme = CORAY_CAST_ROPES; scheme <= CORAY_CAST_HLCTS_2D; scheme++) {
+                cp = coray_cast_params_default();
+                cp.scheme = scheme;
+                CHECK_STATUS(coray_kdtree_cast_requirements(&cam, &cp, &cr), CORAY_STATUS_OK);
+                scratch = arena_alloc(cr.scratch_bytes);
+                memset(hits, 0xAB, n * sizeof(CorayHit));
+                CHECK_STATUS(coray_kdtree_cast_image(&plain.tree, &cam, &cp, scratch, cr.scratch_bytes, &stack, sizeof stack, hits, NULL), CORAY_STATUS_NO_ROPES);
+                for (i = 0; i < n; i++) CHECK(hits[i].geom_id == 0xABABABABu);
+                CHECK_STATUS(coray_kdtree_cast_image(&roped.tree, &cam, &cp, scratch, cr.scratch_bytes, &stack, sizeof stack, hits, NULL), CORAY_STATUS_OK);
+                CHECK(memcmp(hits, plain_ref, n * sizeof(CorayHit)) == 0);
+                free(scratch);
+            }
+            CHECK_STATUS(coray_kdtree_patch_visibility(&plain.tree, a, 3, b, 3, 4, 1e-4f, ps, pr_req.scratch_bytes, &stack, sizeof stack, &r, NULL), CORAY_STATUS_NO_ROPES);
+            CHECK(r.samples == 0);
+            CHECK_STATUS(coray_kdtree_patch_visibility(&roped.tree, a, 3, b, 3, 4, 1e-4f, ps, pr_req.scratch_bytes, &stack, sizeof stack, &r, NULL), CORAY_STATUS_OK);
+            CHECK(r.samples == 256);
+            CHECK(strcmp(coray_status_str(CORAY_STATUS_NO_ROPES), "unknown status") != 0);
+            free(plain_ref);
+            free(plain.arena);
+            free(roped.arena);
+        }
         free(ps);
     }
     free(ref);

@@ -78,6 +78,7 @@ int main(void) {
 
     for (preset = 0; preset < 2; preset++) {
         CorayKdParams p = coray_kdtree_params_default(preset);
+        p.omit_ropes = 0; /* the casts and the patch query below walk ropes */
         CHECK_STATUS(coray_kdtree_requirements(n, &p, &req), CORAY_STATUS_OK);
         arena = arena_alloc(req.arena_bytes);
         scratch = arena_alloc(req.scratch_bytes);

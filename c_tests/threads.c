@@ -122,7 +122,7 @@ int main(void) {
     memset(&s, 0, sizeof s);
     s.rays = rays;
     s.eye_rays = eye_rays;
-    s.kd = tree_build(&ts.view, CORAY_KD_PRESET_AUTO);
+    s.kd = tree_build_roped(&ts.view, CORAY_KD_PRESET_AUTO);
     s.bvh = build_bvh(&ts.view, CORAY_BVH_BUILDER_TDBS, &s.arenas[0], &s.bvh_stack);
     s.rtree = build_bvh(&ts.view, CORAY_BVH_BUILDER_RSTAR, &s.arenas[1], &s.rtree_stack);
     s.cam = coray_camera_default();

@@ -14,7 +14,7 @@
 #define CORAY_VERSION_MAJOR 1
 
 // Minor version: new functions or struct fields, compatible.
-#define CORAY_VERSION_MINOR 1
+#define CORAY_VERSION_MINOR 2
 
 // Patch version: fixes only.
 #define CORAY_VERSION_PATCH 0
@@ -63,6 +63,9 @@ typedef enum CorayStatus {
   CORAY_STATUS_SCENE_MISMATCH = 8,
   // A bug in coray (a caught panic). Please report it.
   CORAY_STATUS_INTERNAL_ERROR = 9,
+  // The call walks ropes (an LCTS cast, a patch query) and the kd-tree
+  // was built without them (`omit_ropes`). Since 1.2.
+  CORAY_STATUS_NO_ROPES = 10,
 } CorayStatus;
 
 // The primitives, borrowed for the duration of each call (coray keeps no
@@ -348,6 +351,11 @@ typedef struct CorayKdParams {
   float cost_intersection;
   // Cost factor of a split with an empty side, in (0, 1] (0.8).
   float empty_bonus;
+  // 1: the tree keeps no ropes (a box and six links per leaf, 48 bytes):
+  // rope traversal then walks hierarchically (same hits), and the casts
+  // and patch queries that walk ropes return `CORAY_STATUS_NO_ROPES`.
+  // 0: ropes. `CORAY_KD_PRESET_AUTO` sets 1, `_PAPER` 0. Since 1.2.
+  uint32_t omit_ropes;
 } CorayKdParams;
 
 // A kd-tree build preset: `CORAY_KD_PRESET_AUTO` or `CORAY_KD_PRESET_PAPER`.

@@ -39,6 +39,9 @@ pub enum Error {
     },
     /// The scene given at trace time is not the one the structure was built on.
     SceneMismatch,
+    /// The kd-tree was built without ropes ([`crate::kd::KdParams::ropes`])
+    /// and the call walks them (an LCTS cast, a patch's visibility).
+    NoRopes,
 }
 
 impl fmt::Display for Error {
@@ -60,6 +63,9 @@ impl fmt::Display for Error {
             Error::Corrupt { what } => write!(f, "corrupt structure: {what}"),
             Error::SceneMismatch => {
                 f.write_str("scene differs from the one the structure was built on")
+            }
+            Error::NoRopes => {
+                f.write_str("the kd-tree has no ropes: build it with ropes for rope-walking casts")
             }
         }
     }

@@ -115,7 +115,7 @@ impl OwnedKd {
         (
             &mut self.nodes[..i.node_count as usize],
             &mut self.leaves[..i.leaf_count as usize],
-            &mut self.ropes[..i.leaf_count as usize],
+            &mut self.ropes[..i.rope_count() as usize],
             &mut self.refs[..i.ref_count as usize],
         )
     }

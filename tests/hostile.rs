@@ -136,12 +136,12 @@ fn kd_node_that_is_its_own_child() {
     watchdog(60, "kd self child", || {
         let s = scene(1);
         let rays = rays();
-        let n = OwnedKd::new(&s.scene(), &KdParams::auto())
+        let n = OwnedKd::new(&s.scene(), &KdParams::auto_with_ropes())
             .unwrap()
             .info()
             .node_count;
         for i in 0..n as usize {
-            let ok = kd_case(&s, &KdParams::auto(), &rays, "self child", |b| {
+            let ok = kd_case(&s, &KdParams::auto_with_ropes(), &rays, "self child", |b| {
                 let nodes = b.parts_mut().0;
                 let nd = nodes[i];
                 if nd.is_leaf() {
@@ -163,7 +163,7 @@ fn kd_ropes_pointing_anywhere() {
         let s = scene(2);
         let rays = rays();
         let sc = s.scene();
-        let clean = OwnedKd::new(&sc, &KdParams::auto()).unwrap();
+        let clean = OwnedKd::new(&sc, &KdParams::auto_with_ropes()).unwrap();
         let (n, leaves) = (clean.info().node_count, clean.info().leaf_count);
         for leaf in (0..leaves as usize).step_by(3) {
             for face in 0..6 {
@@ -171,7 +171,7 @@ fn kd_ropes_pointing_anywhere() {
                     // A rope to a node higher up that still covers the face
                     // (the root, say) is slower but right: validate may
                     // accept it, and kd_case then checks the hits.
-                    kd_case(&s, &KdParams::auto(), &rays, "rope", |b| {
+                    kd_case(&s, &KdParams::auto_with_ropes(), &rays, "rope", |b| {
                         let ropes = b.parts_mut().2;
                         if ropes[leaf].neighbor[face] == bad {
                             return false;
@@ -240,31 +240,37 @@ fn kd_random_words() {
                 2 => u32::MAX - rng.below(4) as u32,
                 _ => f32::NAN.to_bits(),
             };
-            let acc = kd_case(&s, &KdParams::auto(), &rays, "random word", |b| {
-                let (nodes, leaves, ropes, refs) = b.parts_mut();
-                let (n, lf, rp, rf) = (nodes.len(), leaves.len(), ropes.len(), refs.len());
-                match part {
-                    0 => {
-                        let nd = &mut nodes[(pick % n as u64) as usize];
-                        if pick & 1 << 40 == 0 {
-                            nd.word = value
-                        } else {
-                            nd.data = value
+            let acc = kd_case(
+                &s,
+                &KdParams::auto_with_ropes(),
+                &rays,
+                "random word",
+                |b| {
+                    let (nodes, leaves, ropes, refs) = b.parts_mut();
+                    let (n, lf, rp, rf) = (nodes.len(), leaves.len(), ropes.len(), refs.len());
+                    match part {
+                        0 => {
+                            let nd = &mut nodes[(pick % n as u64) as usize];
+                            if pick & 1 << 40 == 0 {
+                                nd.word = value
+                            } else {
+                                nd.data = value
+                            }
                         }
-                    }
-                    1 => leaves[(pick % lf as u64) as usize].ref_count = value,
-                    2 => {
-                        let r = &mut ropes[(pick % rp as u64) as usize];
-                        match pick >> 40 & 3 {
-                            0 => r.neighbor[(pick >> 44) as usize % 6] = value,
-                            1 => r.min[(pick >> 44) as usize % 3] = f32::from_bits(value),
-                            _ => r.max[(pick >> 44) as usize % 3] = f32::from_bits(value),
+                        1 => leaves[(pick % lf as u64) as usize].ref_count = value,
+                        2 => {
+                            let r = &mut ropes[(pick % rp as u64) as usize];
+                            match pick >> 40 & 3 {
+                                0 => r.neighbor[(pick >> 44) as usize % 6] = value,
+                                1 => r.min[(pick >> 44) as usize % 3] = f32::from_bits(value),
+                                _ => r.max[(pick >> 44) as usize % 3] = f32::from_bits(value),
+                            }
                         }
+                        _ => refs[(pick % rf as u64) as usize] = value,
                     }
-                    _ => refs[(pick % rf as u64) as usize] = value,
-                }
-                true
-            });
+                    true
+                },
+            );
             if acc {
                 eprintln!("accepted: trial {trial} part {part} value {value:#x}");
             }
@@ -567,7 +573,7 @@ fn builds_over_infinite_areas() {
             )
         })
         .collect();
-    let kd = OwnedKd::new(&sc, &KdParams::auto()).expect("kd build");
+    let kd = OwnedKd::new(&sc, &KdParams::auto_with_ropes()).expect("kd build");
     let tree = kd.tree(sc).unwrap();
     tree.validate().expect("kd validates");
     let (reference, _) = exercise_kd(&tree, &rays);

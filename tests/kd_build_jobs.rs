@@ -7,7 +7,7 @@ mod common;
 use common::{random_scene, Rng};
 use coray::kd::{
     self, KdEvent, KdInfo, KdJobReport, KdLeaf, KdNode, KdParams, KdRequirements, KdRopes,
-    KdScratch, KdStorage, KD_FLAG_TRUNCATED,
+    KdScratch, KdStorage, KD_FLAG_ROPES, KD_FLAG_TRUNCATED,
 };
 use coray::Scene;
 use coray_scenes::spd::{self, Options};
@@ -135,8 +135,8 @@ fn spd_mesh(name: &str, size: Option<u32>) -> SceneMesh {
 /// Every way of running the jobs gives the same bytes, the depth-first
 /// build's when that one is not truncated, and the scene was cut into
 /// several jobs. Returns whether the depth-first build was truncated, and
-/// its tree's digest.
-fn check_equal(scene: &Scene, params: &KdParams, what: &str) -> (bool, u64) {
+/// that build.
+fn check_equal(scene: &Scene, params: &KdParams, what: &str) -> (bool, Made) {
     let req = kd::requirements(scene.prim_count(), params);
     let reference = depth_first(scene, params, &req);
     let truncated = reference.info.flags & KD_FLAG_TRUNCATED != 0;
@@ -161,14 +161,14 @@ fn check_equal(scene: &Scene, params: &KdParams, what: &str) -> (bool, u64) {
             assert!(m == reference, "{what} {run:?}: the job build differs");
         }
     }
-    (truncated, tree_digest(&reference))
+    (truncated, reference)
 }
 
 /// The trees themselves are pinned too: a change that means to make the
 /// build faster must leave every tree as it was (these digests are of the
-/// trees of a159a8c, checked there). A change that means to make other
-/// trees updates them, and shows in its message what the new trees trace
-/// like.
+/// trees of a159a8c, checked there, `auto` with ropes as every tree had
+/// then). A change that means to make other trees updates them, and shows
+/// in its message what the new trees trace like.
 const PINNED: [(&str, u64, u64); 8] = [
     ("balls", 0x5eb074aab3000317, 0x0d62d546331a9f41),
     ("gears", 0xaaf81c460ae905c3, 0x7c3ee7c8ba72459f),
@@ -186,14 +186,38 @@ fn job_build_equals_depth_first_on_spd_scenes_whose_trees_are_pinned() {
     let mut digests = Vec::new();
     for &(name, _) in spd::SCENES {
         let mesh = spd_mesh(name, None);
+        let scene = mesh.scene();
         let mut check = |params: KdParams| {
-            let (t, digest) = check_equal(&mesh.scene(), &params, &format!("{name} {params:?}"));
+            let (t, reference) = check_equal(&scene, &params, &format!("{name} {params:?}"));
             if t {
                 truncated.push((name, params.sah_termination));
             }
-            digest
+            reference
         };
-        digests.push((name, check(KdParams::auto()), check(KdParams::paper())));
+        // `auto` builds no ropes: its jobs run without rope slots. The tree
+        // is `auto` with ropes less its ropes (pinned with them).
+        let (auto, paper) = (check(KdParams::auto()), check(KdParams::paper()));
+        let with_ropes = KdParams::auto_with_ropes();
+        let roped = depth_first(
+            &scene,
+            &with_ropes,
+            &kd::requirements(scene.prim_count(), &with_ropes),
+        );
+        assert!(auto.ropes.is_empty() && !auto.info.has_ropes(), "{name}");
+        assert_eq!(roped.ropes.len(), roped.leaves.len(), "{name}");
+        assert_eq!(
+            KdInfo {
+                flags: roped.info.flags & !KD_FLAG_ROPES,
+                ..roped.info
+            },
+            auto.info,
+            "{name}"
+        );
+        assert!(
+            (&roped.nodes, &roped.leaves, &roped.refs) == (&auto.nodes, &auto.leaves, &auto.refs),
+            "{name}: the ropes changed the tree"
+        );
+        digests.push((name, tree_digest(&roped), tree_digest(&paper)));
     }
     // The one build here the depth-first build truncates.
     assert_eq!(truncated, [("gears", true)]);
@@ -220,7 +244,6 @@ fn job_build_falls_back_to_one_pass_when_a_share_runs_out() {
     let least = kd::KdRequirements {
         refs: 2 * scene.prim_count(),
         leaves: scene.prim_count(),
-        ropes: scene.prim_count(),
         nodes: 2 * scene.prim_count(),
         ..ideal
     };

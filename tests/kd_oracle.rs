@@ -7,7 +7,12 @@ use coray::kd::{self, KdParams, KdTree, Traversal};
 use coray::{oracle, Cone, Hit, Ray, Sphere, TraceStats, Vec3};
 
 const METHODS: [Traversal; 2] = [Traversal::Hierarchical, Traversal::Ropes];
-const PRESETS: [(&str, KdParams); 2] = [("paper", KdParams::paper()), ("auto", KdParams::auto())];
+// `auto` with ropes: its nodes and references are `auto`'s (pinned in
+// tests/kd_build_jobs.rs), and rope traversal has ropes to walk.
+const PRESETS: [(&str, KdParams); 2] = [
+    ("paper", KdParams::paper()),
+    ("auto", KdParams::auto_with_ropes()),
+];
 
 /// Both miss, or both hit at the same t bit for bit (both call the same
 /// primitive test). The primitive may differ only in a tie: two primitives
@@ -214,7 +219,7 @@ fn invalid_rays_hit_nothing() {
         Ray::new(Vec3::splat(f32::INFINITY), Vec3::X, 0.0, 1.0),
     ];
     let scene = o.scene();
-    let params = KdParams::auto();
+    let params = KdParams::auto_with_ropes();
     let (req, mut b) = ideal_storage(&scene, &params);
     let tree = build_with(&scene, &params, &req, &mut b);
     for r in &rays {
@@ -298,8 +303,22 @@ fn degenerate_primitives_are_never_hit() {
 
 /// Exactly the minimum succeeds; one element less in any slice fails with
 /// the count needed; less than the ideal room truncates but stays exact.
+/// With ropes and without (no rope slot is asked for then).
 #[test]
 fn exact_fit_and_one_less() {
+    for params in [
+        KdParams::paper(),
+        KdParams {
+            ropes: false,
+            ..KdParams::paper()
+        },
+    ] {
+        exact_fit_and_one_less_with(&params);
+    }
+}
+
+fn exact_fit_and_one_less_with(params: &KdParams) {
+    let params = *params;
     let mut rng = Rng(8);
     let random_n = 5 + rng.below(500);
     for n in [0usize, 1, 2, 3, 7, 1000, random_n] {
@@ -307,8 +326,8 @@ fn exact_fit_and_one_less() {
         let scene = o.scene();
         assert_eq!(scene.prim_count(), n);
         let rays = random_rays(&mut rng, 200, 1.0);
-        let params = KdParams::paper();
-        let min = kd::min_requirements(n);
+        let min = kd::min_requirements(n, &params);
+        assert_eq!(min.ropes, params.ropes as usize);
         let (mut b, _, _) = storage_for(&min);
         let tree = build_with(&scene, &params, &min, &mut b);
         assert_eq!(tree.info().node_count, 1);
@@ -345,7 +364,7 @@ fn exact_fit_and_one_less() {
         let half = kd::KdRequirements {
             nodes: (ideal.nodes / 8).max(1),
             leaves: (ideal.leaves / 8).max(1),
-            ropes: (ideal.ropes / 8).max(1),
+            ropes: (ideal.ropes / 8).max(min.ropes),
             refs: (ideal.refs / 3).max(n),
             events: (ideal.events / 3).max(6 * n),
             prim_flags: n,
@@ -542,7 +561,7 @@ fn harness_scene() -> OwnedScene {
 fn ropes_answer_as_hierarchical_traversal_at_the_edges_of_f32() {
     let s = harness_scene();
     let sc = s.scene();
-    let kd = coray::owned::OwnedKd::new(&sc, &KdParams::auto()).unwrap();
+    let kd = coray::owned::OwnedKd::new(&sc, &KdParams::auto_with_ropes()).unwrap();
     let t = kd.tree(sc).unwrap();
     let rays = [
         Ray::new(
@@ -577,5 +596,68 @@ fn ropes_answer_as_hierarchical_traversal_at_the_edges_of_f32() {
             t.occluded(r, Traversal::Ropes, &mut k, &mut st),
             t.occluded(r, Traversal::Hierarchical, &mut k, &mut st)
         );
+    }
+}
+
+/// A tree built without ropes (`auto`'s default) is the tree with ropes
+/// less its ropes: the same nodes, leaves and references, 48 bytes less a
+/// leaf. Rope traversal on it walks hierarchically (the same hits and the
+/// same work as hierarchical traversal), and the casts that walk ropes
+/// refuse it with `NoRopes` while the hierarchical cast runs.
+#[test]
+fn a_tree_without_ropes_is_the_same_tree_and_traces_alike() {
+    use coray::lcts::{cast_image, image_requirements, Scheme};
+    use coray::owned::{OwnedCast, OwnedKd};
+    let mut rng = Rng(12);
+    let o = random_scene(&mut rng, 1500, 200, 100, 1.0);
+    let scene = o.scene();
+    let rays = random_rays(&mut rng, 2000, 1.0);
+    let plain = OwnedKd::new(&scene, &KdParams::auto()).unwrap();
+    let roped = OwnedKd::new(&scene, &KdParams::auto_with_ropes()).unwrap();
+    let (p, r) = (plain.tree(scene).unwrap(), roped.tree(scene).unwrap());
+    p.validate().unwrap();
+    r.validate().unwrap();
+    assert!(!p.info().has_ropes() && r.info().has_ropes());
+    let ((pn, pl, pr, prefs), (rn, rl, rr, rrefs)) = (p.parts(), r.parts());
+    assert!(pn == rn && pl == rl && prefs == rrefs);
+    assert_eq!((pr.len(), rr.len()), (0, rl.len()));
+    assert_eq!(
+        roped.arena_bytes() - plain.arena_bytes(),
+        48 * rl.len(),
+        "the ropes' bytes"
+    );
+    check_all(&p, &rays, "auto without ropes");
+    for ray in &rays {
+        let (mut a, mut b) = (TraceStats::default(), TraceStats::default());
+        let ha = p.intersect(ray, Traversal::Ropes, &mut kst(), &mut a);
+        let hb = p.intersect(ray, Traversal::Hierarchical, &mut kst(), &mut b);
+        assert!(ha == hb && a == b, "{ray:?}: {a:?} {b:?}");
+    }
+    let m = coray_scenes::SceneMesh::from_nff(
+        &coray_scenes::spd::generate("balls", Some(2), &Default::default()).unwrap(),
+    );
+    let mut cam = m.camera;
+    (cam.width, cam.height) = (40, 30);
+    let plain = OwnedKd::new(&m.scene(), &KdParams::auto()).unwrap();
+    let roped = OwnedKd::new(&m.scene(), &KdParams::auto_with_ropes()).unwrap();
+    let (p, r) = (
+        plain.tree(m.scene()).unwrap(),
+        roped.tree(m.scene()).unwrap(),
+    );
+    let cast = |t: &KdTree, s: Scheme| {
+        let mut room = OwnedCast::new(&image_requirements(cam.width, cam.height, s, 64));
+        let mut hits = vec![Hit::MISS; 1200];
+        cast_image(t, &cam, s, room.scratch(), &mut hits).map(|_| hits)
+    };
+    let want = cast(&p, Scheme::Hierarchical).unwrap();
+    for s in [
+        Scheme::Ropes,
+        Scheme::Slcts1d { n: 5 },
+        Scheme::Slcts2d { n: 5, m: 5 },
+        Scheme::Hlcts1d,
+        Scheme::Hlcts2d,
+    ] {
+        assert_eq!(cast(&p, s), Err(coray::Error::NoRopes), "{s:?}");
+        assert_eq!(cast(&r, s).unwrap(), want, "{s:?}");
     }
 }

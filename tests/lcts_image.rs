@@ -46,7 +46,7 @@ fn every_scheme_matches_hierarchical_on_the_spd_scenes() {
         let mut cam = m.camera;
         cam.width = 256;
         cam.height = 256;
-        for params in [KdParams::paper(), KdParams::auto()] {
+        for params in [KdParams::paper(), KdParams::auto_with_ropes()] {
             let (req, mut b) = ideal_storage(&scene, &params);
             let tree = build_with(&scene, &params, &req, &mut b);
             let (t0, p0, s0) = cast(&tree, &cam, Scheme::Hierarchical, 256);

@@ -75,7 +75,11 @@ impl<'s> Built<'s> {
                 preset: p,
                 traversal,
             } => {
-                let params = p.unwrap_or(preset).params();
+                let params = coray::kd::KdParams {
+                    // Ropes only for the traversal that walks them.
+                    ropes: traversal == Traversal::Ropes,
+                    ..p.unwrap_or(preset).params()
+                };
                 let mut o =
                     OwnedKd::with_room(&coray::kd::requirements(scene.prim_count(), &params));
                 let t = Instant::now();

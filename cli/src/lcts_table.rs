@@ -6,7 +6,6 @@ use crate::bench::{self, Row, Settings};
 use crate::built::Built;
 use crate::method::Method;
 use crate::scene::SceneData;
-use coray::kd::Traversal;
 use coray::lcts::Scheme;
 
 /// The six methods of the paper's tables, in its order: the row's name,
@@ -129,7 +128,7 @@ impl Column {
 /// hierarchical cast timed in its own run (so the hierarchical row's eta
 /// shows the timing noise).
 pub fn column(s: &SceneData, label: String, set: &Settings) -> Result<Column, String> {
-    let built = Built::new(Method::kd(Traversal::Hierarchical), &s.mesh, set.preset, 1)?;
+    let built = Built::new(Method::kd_for_casts(), &s.mesh, set.preset, 1)?;
     let kd = built.kd().expect("a kd method");
     let tree = kd.tree(s.mesh.scene()).map_err(|e| e.to_string())?;
     let rows = LCTS_METHODS

@@ -149,6 +149,10 @@ enum Command {
         /// kd-tree preset: auto or paper.
         #[arg(long, default_value = "auto")]
         preset: String,
+        /// Leave the ropes out (48 bytes a leaf): a smaller file whose tree
+        /// rope traversal walks hierarchically and the LCTS casts refuse.
+        #[arg(long)]
+        no_ropes: bool,
     },
     /// Objects by type and, per structure, its size and shape.
     Stats {
@@ -203,12 +207,7 @@ fn render_spd(
     budget::check_memory(&format!("{n}x{n} corner rays"), n * n * 12.0)?;
     let mesh = spd::procedure_mesh(&s.mesh, pixels);
     let (outcome, threads) = if let Method::Cast { scheme } = method {
-        let b = built::Built::new(
-            Method::kd(coray::kd::Traversal::Hierarchical),
-            &mesh,
-            preset,
-            1,
-        )?;
+        let b = built::Built::new(Method::kd_for_casts(), &mesh, preset, 1)?;
         let tree = b
             .kd()
             .expect("a kd method")
@@ -480,6 +479,7 @@ fn run(command: Command, floor_split: u32) -> Result<i32, String> {
             scene,
             output,
             preset,
+            no_ropes,
         } => {
             let preset = match Preset::parse(&preset)? {
                 Preset::Auto => coray_ffi::CORAY_KD_PRESET_AUTO,
@@ -489,9 +489,12 @@ fn run(command: Command, floor_split: u32) -> Result<i32, String> {
             let n = s.prim_count();
             budget::check_memory(
                 &format!("a kd-tree over {n} primitives"),
-                budget::kd_bytes(&coray::kd::requirements(n, &Preset::Auto.params())),
+                budget::kd_bytes(&coray::kd::requirements(
+                    n,
+                    &coray::kd::KdParams::auto_with_ropes(),
+                )),
             )?;
-            let bytes = coray_ffi::saved::kdtree_file(&s.mesh.scene(), preset)
+            let bytes = coray_ffi::saved::kdtree_file(&s.mesh.scene(), preset, !no_ropes)
                 .map_err(|st| format!("{scene}: the build failed: {}", status_text(st)))?;
             std::fs::write(&output, &bytes).map_err(|e| format!("{}: {e}", output.display()))?;
             println!(

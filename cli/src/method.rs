@@ -153,6 +153,12 @@ impl Method {
         }
     }
 
+    /// The kd-tree the LCTS casts walk: the command's preset, with ropes
+    /// (traced by them when used as a ray method).
+    pub fn kd_for_casts() -> Method {
+        Method::kd(Traversal::Ropes)
+    }
+
     /// The four LCTS image casts with the paper's windows.
     pub fn casts() -> Vec<Method> {
         [

@@ -293,7 +293,7 @@ mod tests {
 
     fn counts_of(mesh: &SceneMesh, method: Method, threads: usize) -> RayCounts {
         if let Method::Cast { scheme } = method {
-            let b = Built::new(Method::kd(Traversal::Hierarchical), mesh, Preset::Auto, 1).unwrap();
+            let b = Built::new(Method::kd_for_casts(), mesh, Preset::Auto, 1).unwrap();
             let tree = b.kd().unwrap().tree(mesh.scene()).unwrap();
             return run_cast(mesh, tree, scheme).unwrap().counts;
         }

@@ -63,7 +63,16 @@ pub struct CorayKdParams {
     pub cost_intersection: f32,
     /// Cost factor of a split with an empty side, in (0, 1] (0.8).
     pub empty_bonus: f32,
+    /// 1: the tree keeps no ropes (a box and six links per leaf, 48 bytes):
+    /// rope traversal then walks hierarchically (same hits), and the casts
+    /// and patch queries that walk ropes return `CORAY_STATUS_NO_ROPES`.
+    /// 0: ropes. `CORAY_KD_PRESET_AUTO` sets 1, `_PAPER` 0. Since 1.2.
+    pub omit_ropes: u32,
 }
+
+// On 64-bit targets the 1.2 field took the 1.0 struct's tail padding (40
+// bytes either way); on 32-bit ones the struct grew from 32 to 36 bytes.
+const _: () = assert!(size_of::<CorayKdParams>() == 40 || size_of::<usize>() != 8);
 
 /// What a built kd-tree holds, from `coray_kdtree_info` (O(1)).
 #[repr(C)]
@@ -99,7 +108,9 @@ pub struct CorayKdTreeInfo {
 // SAFETY (both): repr(C), size_t struct_size first, integer and float
 // fields only; as first published.
 unsafe impl Versioned for CorayKdParams {
-    const SIZE_1_0: usize = size_of::<Self>();
+    // 1.0 ended at `empty_bonus`, padded to size_t's alignment.
+    const SIZE_1_0: usize =
+        core::mem::offset_of!(CorayKdParams, omit_ropes).next_multiple_of(align_of::<usize>());
 }
 unsafe impl Versioned for CorayKdTreeInfo {
     const SIZE_1_0: usize = size_of::<Self>();
@@ -123,6 +134,7 @@ pub extern "C" fn coray_kdtree_params_default(preset: CorayKdPreset) -> CorayKdP
         cost_traversal: p.cost_traversal,
         cost_intersection: p.cost_intersection,
         empty_bonus: p.empty_bonus,
+        omit_ropes: !p.ropes as u32,
     }
 }
 
@@ -137,7 +149,7 @@ pub extern "C" fn coray_kdtree_info_default() -> CorayKdTreeInfo {
 
 impl CorayKdParams {
     fn to_core(self) -> Result<kd::KdParams, CorayStatus> {
-        if self.sah_termination > 1 {
+        if self.sah_termination > 1 || self.omit_ropes > 1 {
             return Err(CorayStatus::InvalidParameter);
         }
         let p = kd::KdParams {
@@ -148,6 +160,7 @@ impl CorayKdParams {
             cost_intersection: self.cost_intersection,
             empty_bonus: self.empty_bonus,
             refs_per_prim: self.refs_per_prim,
+            ropes: self.omit_ropes == 0,
         };
         p.check()?;
         Ok(p)
@@ -177,7 +190,7 @@ fn sizes(n: usize, p: &kd::KdParams) -> Result<Sizes, CorayStatus> {
     if n >= MAX_PRIMS {
         return Err(too_many);
     }
-    let (min, ideal) = (kd::min_requirements(n), kd::requirements(n, p));
+    let (min, ideal) = (kd::min_requirements(n, p), kd::requirements(n, p));
     let min_layout = KdArenaLayout::of(&min).ok_or(too_many)?;
     // The ideal may pass 4 GiB: a build then takes what an arena holds.
     let ideal_bytes =
@@ -312,7 +325,7 @@ pub unsafe extern "C" fn coray_kdtree_build_jobs(
         check_arena(sbase)?;
         let n = scene.prim_count();
         let s = sizes(n, &p)?;
-        let min = kd::min_requirements(n);
+        let min = kd::min_requirements(n, &p);
         let fit = arena_bytes.min(coray::limits::MAX_ARENA_BYTES);
         let Some(layout) = KdArenaLayout::fit(fit, &min, &s.ideal) else {
             needed.write(s.min.total_bytes);

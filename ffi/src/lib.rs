@@ -45,7 +45,7 @@ pub use proj::*;
 /// Major version of the C ABI: changes only with an incompatible change.
 pub const CORAY_VERSION_MAJOR: u32 = 1;
 /// Minor version: new functions or struct fields, compatible.
-pub const CORAY_VERSION_MINOR: u32 = 1;
+pub const CORAY_VERSION_MINOR: u32 = 2;
 /// Patch version: fixes only.
 pub const CORAY_VERSION_PATCH: u32 = 0;
 
@@ -80,6 +80,9 @@ pub enum CorayStatus {
     SceneMismatch = 8,
     /// A bug in coray (a caught panic). Please report it.
     InternalError = 9,
+    /// The call walks ropes (an LCTS cast, a patch query) and the kd-tree
+    /// was built without them (`omit_ropes`). Since 1.2.
+    NoRopes = 10,
 }
 
 impl From<coray::Error> for CorayStatus {
@@ -92,6 +95,7 @@ impl From<coray::Error> for CorayStatus {
             E::InvalidParameter { .. } => CorayStatus::InvalidParameter,
             E::Corrupt { .. } => CorayStatus::CorruptArena,
             E::SceneMismatch => CorayStatus::SceneMismatch,
+            E::NoRopes => CorayStatus::NoRopes,
             _ => CorayStatus::InternalError,
         }
     }
@@ -132,6 +136,7 @@ pub fn status_description(status: i32) -> &'static core::ffi::CStr {
         7 => c"corrupt arena",
         8 => c"scene differs from the one the arena was built on",
         9 => c"internal error (a bug in coray)",
+        10 => c"the kd-tree has no ropes (built with omit_ropes)",
         _ => c"unknown status",
     }
 }
@@ -167,6 +172,6 @@ mod tests {
             super::CORAY_VERSION_PATCH
         );
         assert_eq!(v, want);
-        assert_eq!(super::coray_version(), 1 << 16 | 1 << 8);
+        assert_eq!(super::coray_version(), 1 << 16 | 2 << 8);
     }
 }

@@ -39,17 +39,19 @@ fn aligned(bytes: usize) -> Vec<u128> {
     std::vec![0u128; bytes.div_ceil(16).max(1)]
 }
 
-/// A kd-tree built on `scene` with `preset` by `coray_kdtree_build`: the
-/// arena (16-byte aligned words, cut to what the tree uses) and the bytes
-/// the tree uses (`arena_bytes_used`).
+/// A kd-tree built on `scene` with `preset`, with ropes or without, by
+/// `coray_kdtree_build`: the arena (16-byte aligned words, cut to what the
+/// tree uses) and the bytes the tree uses (`arena_bytes_used`).
 pub(crate) fn build_arena(
     scene: &Scene,
     preset: CorayKdPreset,
+    ropes: bool,
 ) -> Result<(Vec<u128>, usize), CorayStatus> {
-    let params = coray_kdtree_params_default(preset);
+    let mut params = coray_kdtree_params_default(preset);
     if params.struct_size == 0 {
         return Err(CorayStatus::InvalidParameter);
     }
+    params.omit_ropes = u32::from(!ropes);
     let c = c_scene(scene);
     let mut req = coray_requirements_default();
     // SAFETY: params and req are live locals with struct_size set.
@@ -111,9 +113,14 @@ pub(crate) fn c_scene(scene: &Scene) -> CorayScene {
     c
 }
 
-/// The file holding `scene` and a kd-tree built on it with `preset`.
-pub fn kdtree_file(scene: &Scene, preset: CorayKdPreset) -> Result<Vec<u8>, CorayStatus> {
-    let (arena, arena_bytes) = build_arena(scene, preset)?;
+/// The file holding `scene` and a kd-tree built on it with `preset`, with
+/// ropes (every call works on it, the casts too) or without (smaller).
+pub fn kdtree_file(
+    scene: &Scene,
+    preset: CorayKdPreset,
+    ropes: bool,
+) -> Result<Vec<u8>, CorayStatus> {
+    let (arena, arena_bytes) = build_arena(scene, preset, ropes)?;
     let arena: Vec<u8> = arena
         .iter()
         .flat_map(|w| w.to_ne_bytes())

@@ -34,13 +34,15 @@ impl Default for CStack {
 
 impl<'s> CKdTree<'s> {
     /// Builds a tree on `scene` with `preset` (`CORAY_KD_PRESET_*`) and
-    /// opens it, to be traced by `traversal` (`CORAY_TRAVERSAL_*`).
+    /// opens it, to be traced by `traversal` (`CORAY_TRAVERSAL_*`): with
+    /// ropes for rope traversal, else without.
     pub fn new(
         scene: &Scene<'s>,
         preset: CorayKdPreset,
         traversal: CorayTraversal,
     ) -> Result<CKdTree<'s>, CorayStatus> {
-        let (arena, bytes) = build_arena(scene, preset)?;
+        let ropes = traversal == crate::CORAY_TRAVERSAL_ROPES;
+        let (arena, bytes) = build_arena(scene, preset, ropes)?;
         let c = c_scene(scene);
         let mut handle = CorayKdTree { opaque: [0; 32] };
         // SAFETY: the arena was just built (16-byte aligned, `bytes` long)

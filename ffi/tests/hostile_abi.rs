@@ -42,9 +42,12 @@ fn requirements() -> CorayRequirements {
     }
 }
 
-/// A kd-tree over `s`, opened.
+/// A kd-tree over `s` with ropes (every call takes it), opened.
 fn kd(s: &CorayScene) -> (Vec<Block>, CorayKdTree) {
-    let p = coray_kdtree_params_default(CORAY_KD_PRESET_AUTO);
+    let p = CorayKdParams {
+        omit_ropes: 0,
+        ..coray_kdtree_params_default(CORAY_KD_PRESET_AUTO)
+    };
     let mut r = requirements();
     unsafe {
         assert_eq!(coray_kdtree_requirements(2, &p, &mut r), CorayStatus::Ok);

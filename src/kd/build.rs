@@ -8,7 +8,9 @@
 //! sorts its whole list again. Depth-first order keeps the live events to the
 //! pending right children plus one split's temporaries.
 
-use super::node::{KdInfo, KdLeaf, KdNode, KD_FLAG_TRUNCATED, KD_MAGIC, KD_MAX_DEPTH, KD_VERSION};
+use super::node::{
+    KdInfo, KdLeaf, KdNode, KD_FLAG_ROPES, KD_FLAG_TRUNCATED, KD_MAGIC, KD_MAX_DEPTH, KD_VERSION,
+};
 use super::{min_requirements, ropes, KdParams, KdScratch, KdStorage, KdTree};
 use crate::geom::{Aabb, Scene};
 use crate::Error;
@@ -207,13 +209,17 @@ pub(super) fn check_build(
 ) -> Result<(), Error> {
     scene.check()?;
     params.check()?;
-    let min = min_requirements(scene.prim_count());
+    let min = min_requirements(scene.prim_count(), params);
     let have = [
         ("nodes", min.nodes, storage.nodes.len()),
         ("leaves", min.leaves, storage.leaves.len()),
         (
             "ropes",
-            storage.leaves.len().max(min.ropes),
+            if params.ropes {
+                storage.leaves.len().max(min.ropes)
+            } else {
+                0
+            },
             storage.ropes.len(),
         ),
         ("refs", min.refs, storage.refs.len()),
@@ -276,7 +282,7 @@ pub fn build_depth_first<'a>(
         prims: root.prims,
     };
     let (storage, _, _) = b.into_parts();
-    Ok(made.into_tree(scene, storage))
+    Ok(made.into_tree(scene, storage, params.ropes))
 }
 
 /// What a build laid out at the start of its storage, before the ropes.
@@ -293,8 +299,14 @@ pub(super) struct Made {
 }
 
 impl Made {
-    /// Ropes, info and the tree over the first counts of `storage`.
-    pub(super) fn into_tree<'a>(self, scene: &Scene<'a>, storage: KdStorage<'a>) -> KdTree<'a> {
+    /// Ropes (when `with_ropes`), info and the tree over the first counts of
+    /// `storage`.
+    pub(super) fn into_tree<'a>(
+        self,
+        scene: &Scene<'a>,
+        storage: KdStorage<'a>,
+        with_ropes: bool,
+    ) -> KdTree<'a> {
         let KdStorage {
             nodes,
             leaves,
@@ -302,8 +314,18 @@ impl Made {
             refs,
         } = storage;
         let (nodes, leaves) = (&nodes[..self.node_count], &leaves[..self.leaf_count]);
-        let (ropes, refs) = (&mut ropes[..self.leaf_count], &refs[..self.ref_count]);
-        ropes::build_ropes(nodes, ropes, &self.bounds);
+        let rope_count = if with_ropes { self.leaf_count } else { 0 };
+        let (rope_records, refs) = (&mut ropes[..rope_count], &refs[..self.ref_count]);
+        if with_ropes {
+            ropes::build_ropes(nodes, rope_records, &self.bounds);
+        }
+        let mut flags = 0;
+        if self.truncated {
+            flags |= KD_FLAG_TRUNCATED;
+        }
+        if with_ropes {
+            flags |= KD_FLAG_ROPES;
+        }
         let info = KdInfo {
             magic: KD_MAGIC,
             version: KD_VERSION,
@@ -315,7 +337,7 @@ impl Made {
             leaf_count: self.leaf_count as u32,
             ref_count: self.ref_count as u32,
             depth: self.depth,
-            flags: if self.truncated { KD_FLAG_TRUNCATED } else { 0 },
+            flags,
             bounds_min: self.bounds.min.into(),
             bounds_max: self.bounds.max.into(),
             ref_digest: {
@@ -328,7 +350,7 @@ impl Made {
             info,
             nodes,
             leaves,
-            ropes,
+            ropes: rope_records,
             refs,
         }
     }
@@ -484,8 +506,11 @@ impl<'s, 'a> Builder<'s, 'a> {
             first_ref: first as u32,
             ref_count: (self.ref_top - first) as u32,
         };
-        self.ropes[li].min = task.voxel.min.into();
-        self.ropes[li].max = task.voxel.max.into();
+        // The leaf's box, for its ropes (a build without ropes has no slots).
+        if let Some(r) = self.ropes.get_mut(li) {
+            r.min = task.voxel.min.into();
+            r.max = task.voxel.max.into();
+        }
         self.nodes[task.node as usize] = KdNode::leaf(li as u32);
         self.depth = self.depth.max(task.depth);
     }

@@ -396,7 +396,7 @@ impl<'s, 'a> KdBuild<'s, 'a> {
         match made {
             Some(made) => {
                 report.one_pass = false;
-                Ok((made.into_tree(&scene, storage), report))
+                Ok((made.into_tree(&scene, storage, params.ropes), report))
             }
             None => {
                 let scratch = KdScratch { events, prim_flags };
@@ -562,7 +562,9 @@ impl Layout<'_, '_, '_> {
                 first_ref: l.first_ref + rb,
                 ref_count: l.ref_count,
             };
-            ropes[at.leaf + i] = ropes[s.leaves.start + i];
+            if let Some(&r) = ropes.get(s.leaves.start + i) {
+                ropes[at.leaf + i] = r;
+            }
         }
         refs.copy_within(s.refs.start..s.refs.start + d.refs, at.re);
     }
@@ -595,7 +597,9 @@ impl Layout<'_, '_, '_> {
             end.re -= d.refs;
             nodes.copy_within(s.nodes.start..s.nodes.start + d.nodes, end.node);
             leaves.copy_within(s.leaves.start..s.leaves.start + d.leaves, end.leaf);
-            ropes.copy_within(s.leaves.start..s.leaves.start + d.leaves, end.leaf);
+            if !ropes.is_empty() {
+                ropes.copy_within(s.leaves.start..s.leaves.start + d.leaves, end.leaf);
+            }
             refs.copy_within(s.refs.start..s.refs.start + d.refs, end.re);
             s.nodes.start = end.node;
             s.leaves.start = end.leaf;
@@ -618,7 +622,7 @@ impl Layout<'_, '_, '_> {
         let storage = KdStorage {
             nodes: &mut nodes[at.node..end.node],
             leaves: &mut leaves[at.leaf..end.leaf],
-            ropes: &mut ropes[at.leaf..end.leaf],
+            ropes: rope_range(ropes, at.leaf..end.leaf),
             refs: &mut refs[at.re..end.re],
         };
         if storage.refs.len() < s.task.prims {
@@ -747,6 +751,15 @@ fn split_jobs<'j>(
     }
 }
 
+/// The rope records of leaf slots `r`: none in a build without ropes.
+fn rope_range(ropes: &mut [KdRopes], r: core::ops::Range<usize>) -> &mut [KdRopes] {
+    if ropes.is_empty() {
+        ropes
+    } else {
+        &mut ropes[r]
+    }
+}
+
 fn take_front<'j, T>(s: &mut &'j mut [T], n: usize) -> &'j mut [T] {
     let (a, b) = core::mem::take(s).split_at_mut(n);
     *s = b;
@@ -774,7 +787,10 @@ impl<'j> Iterator for KdJobs<'j> {
             task: s.task,
             nodes: take_front(&mut self.nodes, s.nodes.len),
             leaves: take_front(&mut self.leaves, s.leaves.len),
-            ropes: take_front(&mut self.ropes, s.leaves.len),
+            ropes: {
+                let n = s.leaves.len.min(self.ropes.len());
+                take_front(&mut self.ropes, n)
+            },
             refs: take_front(&mut self.refs, s.refs.len),
             events: &mut region[..s.working_events()],
             done: self.done.next()?,

@@ -64,7 +64,7 @@ impl KdArenaLayout {
             KdArenaLayout::of(&KdRequirements {
                 nodes: lerp(min.nodes, ideal.nodes).min(2 * leaves - 1),
                 leaves,
-                ropes: leaves,
+                ropes: if ideal.ropes > 0 { leaves } else { 0 },
                 refs: lerp(min.refs, ideal.refs),
                 events: 0,
                 prim_flags: 0,
@@ -92,7 +92,7 @@ impl KdArenaLayout {
         KdArenaLayout::of(&KdRequirements {
             nodes: n(info.node_count),
             leaves: n(info.leaf_count),
-            ropes: n(info.leaf_count),
+            ropes: n(info.rope_count()),
             refs: n(info.ref_count),
             events: 0,
             prim_flags: 0,
@@ -217,7 +217,8 @@ pub struct KdArenaHeader {
     pub layout_bytes: u32,
     /// Capacity of the node part.
     pub nodes_cap: u32,
-    /// Capacity of the leaf and rope parts.
+    /// Capacity of the leaf part, and of the rope part when the info's
+    /// [`KdInfo::has_ropes`] (else that part is empty).
     pub leaves_cap: u32,
     /// Capacity of the reference part.
     pub refs_cap: u32,
@@ -264,7 +265,12 @@ impl KdArenaHeader {
         let counts = KdRequirements {
             nodes: self.nodes_cap as usize,
             leaves: self.leaves_cap as usize,
-            ropes: self.leaves_cap as usize,
+            // The ropes' part is as long as the leaves' when the tree has ropes.
+            ropes: if self.info.has_ropes() {
+                self.leaves_cap as usize
+            } else {
+                0
+            },
             refs: self.refs_cap as usize,
             events: 0,
             prim_flags: 0,
@@ -347,9 +353,15 @@ mod tests {
             node_count: 5,
             leaf_count: 3,
             ref_count: 7,
+            flags: crate::kd::KD_FLAG_ROPES,
             ..KdInfo::default()
         };
         let tight = KdArenaLayout::tight(&info).unwrap();
+        // Without ropes the rope part is empty: the references follow the leaves.
+        let plain = KdArenaLayout::tight(&KdInfo { flags: 0, ..info }).unwrap();
+        assert_eq!(plain.counts.ropes, 0);
+        assert_eq!(plain.ropes_offset, plain.refs_offset);
+        assert_eq!(plain.total_bytes + 3 * 48, tight.total_bytes);
         // Every used byte of a part holds its part's tag and its index.
         let mut arena = [0xEEu8; 1024];
         assert!(room.total_bytes < arena.len());

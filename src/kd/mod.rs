@@ -21,8 +21,8 @@ mod validate;
 pub use build::{build, build_depth_first, KdEvent};
 pub use build_jobs::{build_begin, KdBuild, KdJob, KdJobReport, KdJobs, KD_MAX_JOBS};
 pub use node::{
-    KdInfo, KdLeaf, KdNode, KdRopes, KdStackItem, KD_FLAG_TRUNCATED, KD_MAGIC, KD_MAX_DEPTH,
-    KD_STACK_LEN, KD_VERSION, NO_NODE,
+    KdInfo, KdLeaf, KdNode, KdRopes, KdStackItem, KD_FLAG_ROPES, KD_FLAG_TRUNCATED, KD_MAGIC,
+    KD_MAX_DEPTH, KD_STACK_LEN, KD_VERSION, NO_NODE,
 };
 pub use packet::LANES as PACKET_LANES;
 pub use traverse::{Decision, Traversal};
@@ -55,11 +55,16 @@ pub struct KdParams {
     /// Ideal room for references, as a multiple of the primitive count
     /// (references are duplicated where primitives straddle splits).
     pub refs_per_prim: u32,
+    /// Whether the build makes ropes: a box and six neighbour links per
+    /// leaf (48 bytes), which rope traversal and the LCTS casts walk. A tree
+    /// without them traces [`Traversal::Ropes`] hierarchically (same hits)
+    /// and refuses the casts that need them ([`Error::NoRopes`]).
+    pub ropes: bool,
 }
 
 impl KdParams {
     /// The LCTS paper's settings: maximum depth 16, a node with at most 2
-    /// objects becomes a leaf.
+    /// objects becomes a leaf; ropes for its rope traversal and casts.
     pub const fn paper() -> KdParams {
         KdParams {
             max_depth: 16,
@@ -69,10 +74,13 @@ impl KdParams {
             cost_intersection: 20.0,
             empty_bonus: 0.8,
             refs_per_prim: 4,
+            ropes: true,
         }
     }
 
-    /// SAH-driven termination with a depth bound from N.
+    /// SAH-driven termination with a depth bound from N; no ropes (the
+    /// hierarchical and packet traversals need none; set
+    /// [`KdParams::ropes`] for rope traversal and the LCTS casts).
     pub const fn auto() -> KdParams {
         KdParams {
             max_depth: 0,
@@ -82,6 +90,15 @@ impl KdParams {
             cost_intersection: 20.0,
             empty_bonus: 0.8,
             refs_per_prim: 4,
+            ropes: false,
+        }
+    }
+
+    /// [`KdParams::auto`] with ropes.
+    pub const fn auto_with_ropes() -> KdParams {
+        KdParams {
+            ropes: true,
+            ..KdParams::auto()
         }
     }
 
@@ -140,9 +157,9 @@ impl Default for KdParams {
 pub struct KdRequirements {
     /// [`KdNode`] slots.
     pub nodes: usize,
-    /// [`KdLeaf`] slots; `ropes` has as many.
+    /// [`KdLeaf`] slots.
     pub leaves: usize,
-    /// [`KdRopes`] slots.
+    /// [`KdRopes`] slots: as many as `leaves` for a build with ropes, else 0.
     pub ropes: usize,
     /// Primitive references (`u32`).
     pub refs: usize,
@@ -168,20 +185,21 @@ pub fn requirements(prim_count: usize, params: &KdParams) -> KdRequirements {
     KdRequirements {
         nodes: 2 * leaves - 1,
         leaves,
-        ropes: leaves,
+        ropes: if params.ropes { leaves } else { 0 },
         refs,
         events: 12 * refs,
         prim_flags: prim_count,
     }
 }
 
-/// The least room a build accepts: one leaf holding every primitive, and
-/// the six events per primitive of the root's sweep.
-pub fn min_requirements(prim_count: usize) -> KdRequirements {
+/// The least room a build accepts: one leaf holding every primitive (and
+/// its ropes, when `params` asks for them), and the six events per
+/// primitive of the root's sweep.
+pub fn min_requirements(prim_count: usize, params: &KdParams) -> KdRequirements {
     KdRequirements {
         nodes: 1,
         leaves: 1,
-        ropes: 1,
+        ropes: params.ropes as usize,
         refs: prim_count,
         events: 6 * prim_count,
         prim_flags: prim_count,
@@ -195,7 +213,8 @@ pub struct KdStorage<'a> {
     pub nodes: &'a mut [KdNode],
     /// Leaf records.
     pub leaves: &'a mut [KdLeaf],
-    /// Ropes and boxes, one per leaf record (at least as long as `leaves`).
+    /// Ropes and boxes, one per leaf record (at least as long as `leaves`)
+    /// for a build with ropes; ignored (may be empty) for one without.
     pub ropes: &'a mut [KdRopes],
     /// Primitive references.
     pub refs: &'a mut [u32],
@@ -220,7 +239,7 @@ pub struct KdTree<'a> {
     pub(crate) nodes: &'a [KdNode],
     /// `info.leaf_count` leaf records.
     pub(crate) leaves: &'a [KdLeaf],
-    /// `info.leaf_count` rope records.
+    /// `info.rope_count()` rope records: one per leaf, or none.
     pub(crate) ropes: &'a [KdRopes],
     /// `info.ref_count` references (global primitive indices).
     pub(crate) refs: &'a [u32],
@@ -250,7 +269,7 @@ impl<'a> KdTree<'a> {
         if info.node_count == 0
             || info.node_count as usize > nodes.len()
             || info.leaf_count as usize > leaves.len()
-            || info.leaf_count as usize > ropes.len()
+            || info.rope_count() as usize > ropes.len()
             || info.ref_count as usize > refs.len()
             || info.depth > KD_MAX_DEPTH
         {
@@ -261,7 +280,7 @@ impl<'a> KdTree<'a> {
             info,
             nodes: &nodes[..info.node_count as usize],
             leaves: &leaves[..info.leaf_count as usize],
-            ropes: &ropes[..info.leaf_count as usize],
+            ropes: &ropes[..info.rope_count() as usize],
             refs: &refs[..info.ref_count as usize],
         };
         tree.check_scene(&scene)?;

@@ -154,10 +154,14 @@ impl KdRopes {
 /// Magic word of a kd-tree's [`KdInfo`]: "CRKD".
 pub const KD_MAGIC: u32 = u32::from_le_bytes(*b"CRKD");
 /// Layout version of [`KdInfo`] and the node types.
-pub const KD_VERSION: u32 = 2;
+pub const KD_VERSION: u32 = 3;
 
 /// Flag in [`KdInfo::flags`]: a capacity stopped splitting somewhere.
 pub const KD_FLAG_TRUNCATED: u32 = 1;
+
+/// Flag in [`KdInfo::flags`]: every leaf has a [`KdRopes`] record (the
+/// build was asked for ropes, [`crate::kd::KdParams::ropes`]).
+pub const KD_FLAG_ROPES: u32 = 2;
 
 /// Everything about a built tree except its arrays: counts, bounds, the scene
 /// fingerprint. Plain data, so a byte arena can carry it as its header.
@@ -178,13 +182,14 @@ pub struct KdInfo {
     pub valid_prim_count: u32,
     /// Nodes used.
     pub node_count: u32,
-    /// Leaves used (each has a [`KdLeaf`] and a [`KdRopes`]).
+    /// Leaves used (each has a [`KdLeaf`], and a [`KdRopes`] when
+    /// [`KdInfo::has_ropes`]).
     pub leaf_count: u32,
     /// References used.
     pub ref_count: u32,
     /// Depth of the deepest leaf (root has depth 0).
     pub depth: u32,
-    /// [`KD_FLAG_TRUNCATED`] and future flags.
+    /// [`KD_FLAG_TRUNCATED`], [`KD_FLAG_ROPES`] and future flags.
     pub flags: u32,
     /// Lower corner of the root box.
     pub bounds_min: [f32; 3],
@@ -236,6 +241,20 @@ impl KdInfo {
     /// True when a capacity made the build stop splitting early.
     pub fn truncated(&self) -> bool {
         self.flags & KD_FLAG_TRUNCATED != 0
+    }
+
+    /// True when the tree has ropes (one [`KdRopes`] record per leaf).
+    pub fn has_ropes(&self) -> bool {
+        self.flags & KD_FLAG_ROPES != 0
+    }
+
+    /// Rope records the tree holds: one per leaf, or none.
+    pub fn rope_count(&self) -> u32 {
+        if self.has_ropes() {
+            self.leaf_count
+        } else {
+            0
+        }
     }
 }
 

@@ -18,7 +18,9 @@ pub enum Traversal {
     Hierarchical,
     /// Leaf to leaf through the six ropes of each leaf; no stack. A ray
     /// that lies exactly in a split plane it must cross falls back to
-    /// hierarchical traversal (both sides of the plane hold its hits).
+    /// hierarchical traversal (both sides of the plane hold its hits), and
+    /// so does every ray of a tree built without ropes
+    /// ([`super::KdParams::ropes`]).
     Ropes,
     /// Arrays of rays in packets of 8 ([`KdTree::intersect_packets`]):
     /// each group of 8 consecutive rays that move alike walks the tree
@@ -677,7 +679,9 @@ impl<'a> KdTree<'a> {
         let Some((t0, t1)) = self.scene_segment(&r) else {
             return false;
         };
-        if !self.points_precise(&r, t0, t1) {
+        // A tree built without ropes, and a ray whose points are too far
+        // out for exact exits, walk hierarchically: the same hits.
+        if !self.info.has_ropes() || !self.points_precise(&r, t0, t1) {
             return self.walk_from(v, &mut NoRecord, stack, 0, t0, t1, steps);
         }
         let end = match self.locate_at(0, &r, t0, steps) {

@@ -75,7 +75,7 @@ impl<'a> KdTree<'a> {
         };
         if self.nodes.len() != info.node_count as usize
             || self.leaves.len() != info.leaf_count as usize
-            || self.ropes.len() != info.leaf_count as usize
+            || self.ropes.len() != info.rope_count() as usize
             || self.refs.len() != info.ref_count as usize
             || info.depth > KD_MAX_DEPTH
         {
@@ -121,7 +121,7 @@ impl<'a> KdTree<'a> {
                 st.refs += l.ref_count;
                 st.depth = st.depth.max(depth);
                 sah += cost_intersection as f64 * l.ref_count as f64 * rel_area;
-                if self.rope(nd.index()).bounds() != b {
+                if info.has_ropes() && self.rope(nd.index()).bounds() != b {
                     return Err(corrupt("leaf box"));
                 }
                 for &p in refs {

@@ -215,7 +215,9 @@ fn bisection_levels(width: u32, height: u32, scheme: Scheme) -> Option<usize> {
 /// hit of pixel (x, y), exactly what hierarchical traversal gives it.
 /// `hits` holds `width * height` entries; the scratch meets
 /// [`image_requirements`] for some history capacity (the capacity is the
-/// records per corner row divided by the corner columns).
+/// records per corner row divided by the corner columns). Every scheme but
+/// [`Scheme::Hierarchical`] walks ropes: the tree needs them
+/// ([`Error::NoRopes`] otherwise).
 pub fn cast_image(
     tree: &KdTree,
     camera: &Camera,
@@ -247,6 +249,9 @@ pub fn cast_image_with(
     mut put: impl FnMut(u32, u32, &Hit),
 ) -> Result<CastStats, Error> {
     let (w, h) = (camera.width, camera.height);
+    if scheme != Scheme::Hierarchical && !tree.info().has_ropes() {
+        return Err(Error::NoRopes);
+    }
     if w == 0 || h == 0 {
         return Err(Error::InvalidParameter {
             name: "camera resolution",

@@ -94,7 +94,8 @@ fn nearest_vertex(n: usize, u: f32, v: f32) -> usize {
 /// along `n x n` sample points on each (n^4 segments), every segment
 /// trimmed by `eps` at its ends. The segments start from the HLCTS of the
 /// vertex-to-vertex segments; each one's answer is exactly what
-/// hierarchical traversal of that segment gives.
+/// hierarchical traversal of that segment gives. The tree needs ropes
+/// ([`Error::NoRopes`] otherwise).
 pub fn patch_visibility(
     tree: &KdTree,
     a: &[Vec3],
@@ -103,6 +104,9 @@ pub fn patch_visibility(
     eps: f32,
     scratch: PatchScratch,
 ) -> Result<PatchVisibility, Error> {
+    if !tree.info().has_ropes() {
+        return Err(Error::NoRopes);
+    }
     for p in [a, b] {
         if !(3..=MAX_PATCH_VERTICES).contains(&p.len()) || p.iter().any(|v| !v.is_finite()) {
             return Err(Error::InvalidParameter { name: "patch" });

@@ -145,7 +145,9 @@ columns: prims = primitives after triangulation; per builder: ms = best build ti
   requirements ask for, and the scratch; Embree: its peak above what it keeps), T = a kd
   build that ran out of room; kd-auto (N thr) = the same build, its jobs on N threads (the
   tree is byte for byte the one-thread build's; a build that runs out of room falls back
-  to one pass on one thread); x = kd-auto's time over Embree's at one thread, xN = at N.";
+  to one pass on one thread); x = kd-auto's time over Embree's at one thread, xN = at N.
+  kd-auto keeps no ropes (hierarchical and packet traversal need none; with ropes, for
+  rope traversal and the LCTS casts, a leaf takes 48 bytes more); kd-paper keeps them.";
 
 /// Prints the rows.
 pub fn print(rows: &[BuildRow]) {

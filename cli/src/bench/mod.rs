@@ -60,6 +60,17 @@ pub fn bench(s: &SceneData, methods: &[Method], set: &Settings) -> Result<Vec<Ro
     )?;
     let kd = reference.kd().expect("a kd method");
     let tree = kd.tree(s.mesh.scene()).map_err(|e| e.to_string())?;
+    // The casts walk ropes: their own tree, the reference's with ropes.
+    let for_casts = if methods.iter().any(|m| matches!(m, Method::Cast { .. })) {
+        Some(Built::new(
+            Method::kd_for_casts(),
+            &s.mesh,
+            set.preset,
+            set.threads,
+        )?)
+    } else {
+        None
+    };
     let w = row::workload(&s.mesh, &tree);
     let mut rows = Vec::new();
     let pb = progress(methods.len() + 1, set.progress);
@@ -76,15 +87,19 @@ pub fn bench(s: &SceneData, methods: &[Method], set: &Settings) -> Result<Vec<Ro
                 preset: None,
                 traversal: Traversal::Hierarchical,
             } => reference_row.clone(),
-            Method::Cast { scheme } => row::run_cast(
-                &tree,
-                &s.mesh.camera,
-                scheme,
-                &m.to_string(),
-                reference.build_ms,
-                kd.arena_bytes(),
-                set.repeat,
-            )?,
+            Method::Cast { scheme } => {
+                let b = for_casts.as_ref().expect("built for the casts");
+                let kd = b.kd().expect("a kd method");
+                row::run_cast(
+                    &kd.tree(s.mesh.scene()).map_err(|e| e.to_string())?,
+                    &s.mesh.camera,
+                    scheme,
+                    &m.to_string(),
+                    b.build_ms,
+                    kd.arena_bytes(),
+                    set.repeat,
+                )?
+            }
             _ => {
                 let b = Built::new(m, &s.mesh, set.preset, set.threads)?;
                 row::run_rays(&b, &w, &tree, set.repeat, set.threads).row

@@ -141,6 +141,13 @@ pub fn run(
         .collect::<Result<_, _>>()?;
     let kd = built[0].kd().expect("kd first");
     let tree = kd.tree(s.mesh.scene()).map_err(|e| e.to_string())?;
+    // The casts walk ropes: kd-rope's tree (the same nodes, with ropes).
+    let roped = built
+        .iter()
+        .find(|b| b.method == Method::kd_for_casts())
+        .and_then(|b| b.kd())
+        .expect("kd-rope is a ray method");
+    let cast_tree = roped.tree(s.mesh.scene()).map_err(|e| e.to_string())?;
     let cam = &s.mesh.camera;
     // Primary rays in 4 x 2 pixel blocks, the order packets take them in.
     let row_major = rays::primary(&s.mesh);
@@ -184,7 +191,7 @@ pub fn run(
         if n_cast > 0 {
             let req = image_requirements(cam.width, cam.height, Scheme::Hierarchical, 512);
             cast_image(
-                &tree,
+                &cast_tree,
                 cam,
                 Scheme::Hierarchical,
                 OwnedCast::new(&req).scratch(),
@@ -209,7 +216,7 @@ pub fn run(
                 if st.rays.set == RaySet::Primary {
                     for (ci, &sc) in CASTS[..n_cast].iter().enumerate() {
                         let (secs, r) = timed(|| {
-                            cast_image(&tree, cam, sc, cast_room[ci].scratch(), &mut cast_hits)
+                            cast_image(&cast_tree, cam, sc, cast_room[ci].scratch(), &mut cast_hits)
                         });
                         r.map_err(|e| e.to_string())?;
                         best[si][built.len() + ci] = best[si][built.len() + ci].min(secs);

@@ -111,7 +111,10 @@ fn coray_matches_embree_on_a_million_rays() {
     let reference: Vec<Hit> = rays.iter().map(|r| embree.intersect(r)).collect();
     let reference_any: Vec<bool> = rays.iter().map(|r| embree.occluded(r)).collect();
 
-    for (name, params) in [("auto", KdParams::auto()), ("paper", KdParams::paper())] {
+    for (name, params) in [
+        ("auto (with ropes)", KdParams::auto_with_ropes()),
+        ("paper", KdParams::paper()),
+    ] {
         let owned = OwnedKd::new(&scene, &params).unwrap();
         let tree = owned.tree(scene).unwrap();
         tree.validate().unwrap();

@@ -145,15 +145,18 @@ fn rays(inp: &mut Input) -> Vec<CorayRay> {
     v
 }
 
+/// Status codes there are (`CORAY_STATUS_OK` = 0 to `_NO_ROPES` = 10).
+pub const STATUS_COUNT: usize = CorayStatus::NoRopes as usize + 1;
+
 /// What a run saw: how many calls ended with each status.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Report {
-    /// Calls per status code (0 to 9).
-    pub statuses: [u32; 10],
+    /// Calls per status code.
+    pub statuses: [u32; STATUS_COUNT],
     /// Whether the corrupted arena validated.
     pub validated: bool,
     /// `run_job` calls of a hostile kd job runner, per status code.
-    pub run_job: [u32; 10],
+    pub run_job: [u32; STATUS_COUNT],
 }
 
 impl Report {
@@ -376,7 +379,11 @@ fn kd(
     } else {
         CORAY_KD_PRESET_AUTO
     };
-    let params = coray_kdtree_params_default(preset);
+    let mut params = coray_kdtree_params_default(preset);
+    // Auto trees with ropes and without (their casts then return NO_ROPES).
+    if !paper {
+        params.omit_ropes = (inp.u8() & 1) as u32;
+    }
     let mut req = requirements();
     // SAFETY: params and req are live locals with struct_size set.
     let s = unsafe { coray_kdtree_requirements(sd.prims(), &params, &mut req) };

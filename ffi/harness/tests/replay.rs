@@ -77,7 +77,7 @@ fn generated_inputs_run_clean() {
 #[test]
 fn kd_builds_with_hostile_job_runners_match_the_clean_build() {
     let mut g = SplitMix64(17);
-    let mut statuses = [0u32; 10];
+    let mut statuses = [0u32; coray_fuzz_harness::STATUS_COUNT];
     for family in [0u8, 3] {
         for flags in 8..16u8 {
             for _ in 0..4 {
