@@ -7,7 +7,7 @@
 //! structure over the scene it was built on.
 
 use crate::bvh::{self, Builder, Bvh, BvhInfo, BvhNode, BvhStackItem, RTree, RTreeParams};
-use crate::kd::{self, KdEvent, KdInfo, KdLeaf, KdNode, KdParams, KdRequirements, KdRopes, KdTree};
+use crate::kd::{self, KdEvent, KdInfo, KdNode, KdParams, KdRequirements, KdRopes, KdTree};
 use crate::lcts::hlcts::HlctsEntry;
 use crate::lcts::{CornerInfo, HistoryRecord, ImageRequirements, ImageScratch};
 use crate::proj::{self, Criteria, ProjBuilder, ProjHierarchy, ProjPlane, Rect};
@@ -23,8 +23,8 @@ pub fn stack<T: Copy + Default>(n: usize) -> Vec<T> {
 /// A kd-tree's parts and its build scratch.
 pub struct OwnedKd {
     nodes: Vec<KdNode>,
-    leaves: Vec<KdLeaf>,
     ropes: Vec<KdRopes>,
+    rope_ids: Vec<u32>,
     refs: Vec<u32>,
     events: Vec<KdEvent>,
     flags: Vec<u8>,
@@ -36,8 +36,8 @@ impl OwnedKd {
     pub fn with_room(req: &KdRequirements) -> OwnedKd {
         OwnedKd {
             nodes: vec![KdNode::default(); req.nodes],
-            leaves: vec![KdLeaf::default(); req.leaves],
             ropes: vec![KdRopes::default(); req.ropes],
+            rope_ids: vec![0; req.rope_ids],
             refs: vec![0; req.refs],
             events: vec![KdEvent::default(); req.events],
             flags: vec![0; req.prim_flags],
@@ -64,8 +64,8 @@ impl OwnedKd {
             params,
             kd::KdStorage {
                 nodes: &mut self.nodes,
-                leaves: &mut self.leaves,
                 ropes: &mut self.ropes,
+                rope_ids: &mut self.rope_ids,
                 refs: &mut self.refs,
             },
             kd::KdScratch {
@@ -93,8 +93,8 @@ impl OwnedKd {
             scene,
             self.info,
             &self.nodes,
-            &self.leaves,
             &self.ropes,
+            &self.rope_ids,
             &self.refs,
         )
     }
@@ -110,12 +110,12 @@ impl OwnedKd {
     }
 
     /// The parts the tree uses, to corrupt in tests or copy elsewhere.
-    pub fn parts_mut(&mut self) -> (&mut [KdNode], &mut [KdLeaf], &mut [KdRopes], &mut [u32]) {
+    pub fn parts_mut(&mut self) -> (&mut [KdNode], &mut [KdRopes], &mut [u32], &mut [u32]) {
         let i = self.info;
         (
             &mut self.nodes[..i.node_count as usize],
-            &mut self.leaves[..i.leaf_count as usize],
             &mut self.ropes[..i.rope_count() as usize],
+            &mut self.rope_ids[..i.rope_id_count() as usize],
             &mut self.refs[..i.ref_count as usize],
         )
     }

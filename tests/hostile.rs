@@ -172,7 +172,7 @@ fn kd_ropes_pointing_anywhere() {
                     // (the root, say) is slower but right: validate may
                     // accept it, and kd_case then checks the hits.
                     kd_case(&s, &KdParams::auto_with_ropes(), &rays, "rope", |b| {
-                        let ropes = b.parts_mut().2;
+                        let ropes = b.parts_mut().1;
                         if ropes[leaf].neighbor[face] == bad {
                             return false;
                         }
@@ -197,12 +197,34 @@ fn kd_leaves_and_refs_out_of_range() {
         let mut cases: Vec<Corrupt> = Vec::new();
         for bad in [prims, prims + 7, u32::MAX, u32::MAX >> 3] {
             cases.push(Box::new(move |b| b.parts_mut().3[0] = bad));
-            cases.push(Box::new(move |b| b.parts_mut().1[1].ref_count = bad));
-            cases.push(Box::new(move |b| b.parts_mut().1[2].first_ref = bad));
-            cases.push(Box::new(move |b| {
+            // A leaf's count, its first reference, both; a rope index.
+            let leaf = |b: &mut OwnedKd, k: usize| {
                 let nodes = b.parts_mut().0;
-                let i = nodes.iter().position(|n| n.is_leaf()).unwrap();
-                nodes[i] = KdNode::leaf(bad >> 2);
+                nodes
+                    .iter()
+                    .enumerate()
+                    .filter(|n| n.1.is_leaf())
+                    .nth(k)
+                    .unwrap()
+                    .0
+            };
+            cases.push(Box::new(move |b| {
+                let i = leaf(b, 1);
+                let n = &mut b.parts_mut().0[i];
+                *n = KdNode::leaf(n.first_ref(), bad >> 2);
+            }));
+            cases.push(Box::new(move |b| {
+                let i = leaf(b, 2);
+                let n = &mut b.parts_mut().0[i];
+                *n = KdNode::leaf(bad, n.ref_count());
+            }));
+            cases.push(Box::new(move |b| {
+                let i = leaf(b, 0);
+                b.parts_mut().0[i] = KdNode::leaf(bad, bad >> 2);
+            }));
+            cases.push(Box::new(move |b| {
+                let i = leaf(b, 3);
+                b.parts_mut().2[i] = bad;
             }));
             cases.push(Box::new(move |b| {
                 b.parts_mut().0[0] = KdNode::interior(0, 0.0, bad >> 2);
@@ -246,8 +268,8 @@ fn kd_random_words() {
                 &rays,
                 "random word",
                 |b| {
-                    let (nodes, leaves, ropes, refs) = b.parts_mut();
-                    let (n, lf, rp, rf) = (nodes.len(), leaves.len(), ropes.len(), refs.len());
+                    let (nodes, ropes, rope_ids, refs) = b.parts_mut();
+                    let (n, ri, rp, rf) = (nodes.len(), rope_ids.len(), ropes.len(), refs.len());
                     match part {
                         0 => {
                             let nd = &mut nodes[(pick % n as u64) as usize];
@@ -257,7 +279,7 @@ fn kd_random_words() {
                                 nd.data = value
                             }
                         }
-                        1 => leaves[(pick % lf as u64) as usize].ref_count = value,
+                        1 => rope_ids[(pick % ri as u64) as usize] = value,
                         2 => {
                             let r = &mut ropes[(pick % rp as u64) as usize];
                             match pick >> 40 & 3 {

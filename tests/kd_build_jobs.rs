@@ -6,8 +6,8 @@ mod common;
 
 use common::{random_scene, Rng};
 use coray::kd::{
-    self, KdEvent, KdInfo, KdJobReport, KdLeaf, KdNode, KdParams, KdRequirements, KdRopes,
-    KdScratch, KdStorage, KD_FLAG_ROPES, KD_FLAG_TRUNCATED,
+    self, KdEvent, KdInfo, KdJobReport, KdNode, KdParams, KdRequirements, KdRopes, KdScratch,
+    KdStorage, KD_FLAG_ROPES, KD_FLAG_TRUNCATED,
 };
 use coray::Scene;
 use coray_scenes::spd::{self, Options};
@@ -16,8 +16,8 @@ use coray_scenes::SceneMesh;
 /// A build's slices, owned.
 struct Room {
     nodes: Vec<KdNode>,
-    leaves: Vec<KdLeaf>,
     ropes: Vec<KdRopes>,
+    rope_ids: Vec<u32>,
     refs: Vec<u32>,
     events: Vec<KdEvent>,
     flags: Vec<u8>,
@@ -27,8 +27,8 @@ impl Room {
     fn new(r: &KdRequirements) -> Room {
         Room {
             nodes: vec![KdNode::default(); r.nodes],
-            leaves: vec![KdLeaf::default(); r.leaves],
             ropes: vec![KdRopes::default(); r.ropes],
+            rope_ids: vec![0; r.rope_ids],
             refs: vec![0; r.refs],
             events: vec![KdEvent::default(); r.events],
             flags: vec![0; r.prim_flags],
@@ -38,8 +38,8 @@ impl Room {
         (
             KdStorage {
                 nodes: &mut self.nodes,
-                leaves: &mut self.leaves,
                 ropes: &mut self.ropes,
+                rope_ids: &mut self.rope_ids,
                 refs: &mut self.refs,
             },
             KdScratch {
@@ -55,19 +55,19 @@ impl Room {
 struct Made {
     info: KdInfo,
     nodes: Vec<KdNode>,
-    leaves: Vec<KdLeaf>,
     ropes: Vec<KdRopes>,
+    rope_ids: Vec<u32>,
     refs: Vec<u32>,
 }
 
 fn made(t: &kd::KdTree) -> Made {
     t.validate().expect("validate");
-    let (nodes, leaves, ropes, refs) = t.parts();
+    let (nodes, ropes, rope_ids, refs) = t.parts();
     Made {
         info: *t.info(),
         nodes: nodes.to_vec(),
-        leaves: leaves.to_vec(),
         ropes: ropes.to_vec(),
+        rope_ids: rope_ids.to_vec(),
         refs: refs.to_vec(),
     }
 }
@@ -203,8 +203,10 @@ fn job_build_equals_depth_first_on_spd_scenes_whose_trees_are_pinned() {
             &with_ropes,
             &kd::requirements(scene.prim_count(), &with_ropes),
         );
-        assert!(auto.ropes.is_empty() && !auto.info.has_ropes(), "{name}");
-        assert_eq!(roped.ropes.len(), roped.leaves.len(), "{name}");
+        assert!(auto.ropes.is_empty() && auto.rope_ids.is_empty(), "{name}");
+        assert!(!auto.info.has_ropes(), "{name}");
+        assert_eq!(roped.ropes.len(), roped.info.leaf_count as usize, "{name}");
+        assert_eq!(roped.rope_ids.len(), roped.nodes.len(), "{name}");
         assert_eq!(
             KdInfo {
                 flags: roped.info.flags & !KD_FLAG_ROPES,
@@ -214,7 +216,7 @@ fn job_build_equals_depth_first_on_spd_scenes_whose_trees_are_pinned() {
             "{name}"
         );
         assert!(
-            (&roped.nodes, &roped.leaves, &roped.refs) == (&auto.nodes, &auto.leaves, &auto.refs),
+            (&roped.nodes, &roped.refs) == (&auto.nodes, &auto.refs),
             "{name}: the ropes changed the tree"
         );
         digests.push((name, tree_digest(&roped), tree_digest(&paper)));
@@ -243,7 +245,6 @@ fn job_build_falls_back_to_one_pass_when_a_share_runs_out() {
     let ideal = kd::requirements(scene.prim_count(), &params);
     let least = kd::KdRequirements {
         refs: 2 * scene.prim_count(),
-        leaves: scene.prim_count(),
         nodes: 2 * scene.prim_count(),
         ..ideal
     };
@@ -301,7 +302,11 @@ fn a_job_given_too_few_flags_is_refused() {
     t.validate().unwrap();
 }
 
-/// FNV-1a over a tree's words: nodes, leaves, ropes and references.
+/// FNV-1a over a tree's words as a159a8c laid them out, so the pins
+/// outlive layout changes: the nodes (a leaf's word its preorder number
+/// `<< 2 | 3`, its data 0), then a leaf record per leaf in preorder (first
+/// reference, count), the rope records (in leaf preorder) and the
+/// references.
 fn tree_digest(m: &Made) -> u64 {
     let mut h = 0xcbf2_9ce4_8422_2325u64;
     let mut word = |w: u32| {
@@ -309,13 +314,32 @@ fn tree_digest(m: &Made) -> u64 {
             h = (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
         }
     };
-    m.nodes.iter().for_each(|n| {
-        word(n.word);
-        word(n.data);
+    // Leaf preorder numbers: left subtrees first, as the builds number them.
+    let mut number = vec![u32::MAX; m.nodes.len()];
+    let mut leaves = Vec::new();
+    let mut stack = vec![0usize];
+    while let Some(i) = stack.pop() {
+        let n = m.nodes[i];
+        if n.is_leaf() {
+            number[i] = leaves.len() as u32;
+            leaves.push((n.first_ref(), n.ref_count()));
+        } else {
+            stack.push(n.left() as usize + 1);
+            stack.push(n.left() as usize);
+        }
+    }
+    m.nodes.iter().enumerate().for_each(|(i, n)| {
+        if n.is_leaf() {
+            word(number[i] << 2 | 3);
+            word(0);
+        } else {
+            word(n.word);
+            word(n.data);
+        }
     });
-    m.leaves.iter().for_each(|l| {
-        word(l.first_ref);
-        word(l.ref_count);
+    leaves.iter().for_each(|&(first, count)| {
+        word(first);
+        word(count);
     });
     for r in &m.ropes {
         r.neighbor.iter().for_each(|&w| word(w));

@@ -342,8 +342,8 @@ fn exact_fit_and_one_less_with(params: &KdParams) {
             let mut less = min;
             let slot = match field {
                 0 => &mut less.nodes,
-                1 => &mut less.leaves,
-                2 => &mut less.ropes,
+                1 => &mut less.ropes,
+                2 => &mut less.rope_ids,
                 3 => &mut less.refs,
                 4 => &mut less.events,
                 _ => &mut less.prim_flags,
@@ -363,8 +363,8 @@ fn exact_fit_and_one_less_with(params: &KdParams) {
         let ideal = kd::requirements(n, &params);
         let half = kd::KdRequirements {
             nodes: (ideal.nodes / 8).max(1),
-            leaves: (ideal.leaves / 8).max(1),
             ropes: (ideal.ropes / 8).max(min.ropes),
+            rope_ids: (ideal.rope_ids / 8).max(min.rope_ids),
             refs: (ideal.refs / 3).max(n),
             events: (ideal.events / 3).max(6 * n),
             prim_flags: n,
@@ -600,8 +600,8 @@ fn ropes_answer_as_hierarchical_traversal_at_the_edges_of_f32() {
 }
 
 /// A tree built without ropes (`auto`'s default) is the tree with ropes
-/// less its ropes: the same nodes, leaves and references, 48 bytes less a
-/// leaf. Rope traversal on it walks hierarchically (the same hits and the
+/// less its ropes: the same nodes and references, 48 bytes less a leaf
+/// and 4 a node (the rope index). Rope traversal on it walks hierarchically (the same hits and the
 /// same work as hierarchical traversal), and the casts that walk ropes
 /// refuse it with `NoRopes` while the hierarchical cast runs.
 #[test]
@@ -618,12 +618,14 @@ fn a_tree_without_ropes_is_the_same_tree_and_traces_alike() {
     p.validate().unwrap();
     r.validate().unwrap();
     assert!(!p.info().has_ropes() && r.info().has_ropes());
-    let ((pn, pl, pr, prefs), (rn, rl, rr, rrefs)) = (p.parts(), r.parts());
-    assert!(pn == rn && pl == rl && prefs == rrefs);
-    assert_eq!((pr.len(), rr.len()), (0, rl.len()));
+    let ((pn, pr, pi, prefs), (rn, rr, ri, rrefs)) = (p.parts(), r.parts());
+    assert!(pn == rn && prefs == rrefs);
+    let leaves = r.info().leaf_count as usize;
+    assert_eq!((pr.len(), pi.len()), (0, 0));
+    assert_eq!((rr.len(), ri.len()), (leaves, rn.len()));
     assert_eq!(
         roped.arena_bytes() - plain.arena_bytes(),
-        48 * rl.len(),
+        48 * leaves + (4 * rn.len()).next_multiple_of(16),
         "the ropes' bytes"
     );
     check_all(&p, &rays, "auto without ropes");

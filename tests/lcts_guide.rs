@@ -139,19 +139,19 @@ fn neighbouring_pixels_guide_each_other() {
 
 /// Point location from the root, as every traversal does it: a point on a
 /// split plane goes where the direction heads; None when the direction
-/// lies in that plane.
+/// lies in that plane. The leaf's rope record.
 fn locate(tree: &KdTree, p: coray::Vec3, d: coray::Vec3) -> Option<u32> {
     let mut node = 0usize;
     loop {
         let nd = tree.parts().0[node];
         if nd.is_leaf() {
-            return Some(nd.index());
+            return Some(tree.parts().2[node]);
         }
         let (a, s) = (nd.axis(), nd.split());
         node = if p[a] < s || (p[a] == s && d[a] < 0.0) {
-            nd.index() as usize
+            nd.left() as usize
         } else if p[a] > s || d[a] > 0.0 {
-            nd.index() as usize + 1
+            nd.left() as usize + 1
         } else {
             return None;
         };
@@ -172,7 +172,7 @@ fn a_leaf_holds_a_point_where_point_location_puts_it() {
     let root = tree.info().bounds();
     let (mut on_faces, mut in_plane) = (0, 0);
     for _ in 0..2000 {
-        let leaf = &tree.parts().2[rng.below(tree.parts().2.len())];
+        let leaf = &tree.parts().1[rng.below(tree.parts().1.len())];
         let bx = leaf.bounds();
         let mut p = bx.min + (bx.max - bx.min) * rng.vec(0.0, 1.0);
         let mut d = rng.unit();
@@ -191,7 +191,7 @@ fn a_leaf_holds_a_point_where_point_location_puts_it() {
         on_faces += snapped as usize;
         let want = locate(&tree, p, d);
         in_plane += want.is_none() as usize;
-        for (i, rp) in tree.parts().2.iter().enumerate() {
+        for (i, rp) in tree.parts().1.iter().enumerate() {
             assert_eq!(
                 holds(rp, p, d),
                 want == Some(i as u32),

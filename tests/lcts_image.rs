@@ -117,9 +117,9 @@ fn locate_path(tree: &coray::kd::KdTree, p: coray::Vec3, d: coray::Vec3) -> Vec<
         }
         let (a, s) = (nd.axis(), nd.split());
         node = if p[a] < s || (p[a] == s && d[a] < 0.0) {
-            nd.index()
+            nd.left()
         } else {
-            nd.index() + 1
+            nd.left() + 1
         };
         path.push(node);
     }
@@ -256,12 +256,7 @@ fn every_cut_entry_a_ray_tests_is_a_step() {
         // box (one step), then walks the whole tree as hierarchical traversal.
         let missed = (0..tree.parts().0.len())
             .filter(|&n| tree.parts().0[n].is_leaf())
-            .map(|n| {
-                (
-                    n,
-                    tree.parts().2[tree.parts().0[n].index() as usize].bounds(),
-                )
-            })
+            .map(|n| (n, tree.parts().1[tree.parts().2[n] as usize].bounds()))
             .find(|(_, bx)| {
                 bx.clip_ray(ray.origin, ray.dir.recip(), ray.t_min, ray.t_max)
                     .is_none()

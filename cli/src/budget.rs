@@ -3,7 +3,7 @@
 //! sizes, threads and repeats, and the memory a job needs against the
 //! memory the machine has. Every refusal names the limit.
 
-use coray::kd::{KdEvent, KdLeaf, KdNode, KdRequirements, KdRopes};
+use coray::kd::{KdEvent, KdNode, KdRequirements, KdRopes};
 use coray::limits::MAX_IMAGE_SIDE;
 use std::mem::size_of;
 
@@ -65,8 +65,8 @@ pub fn check_count(what: &str, n: usize, max: usize) -> Result<usize, String> {
 /// Bytes of a kd-tree built with `req`, scratch included (the peak).
 pub fn kd_bytes(req: &KdRequirements) -> f64 {
     (req.nodes * size_of::<KdNode>()
-        + req.leaves * size_of::<KdLeaf>()
         + req.ropes * size_of::<KdRopes>()
+        + req.rope_ids * 4
         + req.refs * 4
         + req.events * size_of::<KdEvent>()
         + req.prim_flags) as f64

@@ -37,7 +37,6 @@ unsafe impl Plain for u8 {}
 unsafe impl Plain for u32 {}
 unsafe impl Plain for f32 {}
 unsafe impl Plain for coray::kd::KdNode {}
-unsafe impl Plain for coray::kd::KdLeaf {}
 unsafe impl Plain for coray::kd::KdRopes {}
 unsafe impl Plain for coray::kd::KdEvent {}
 unsafe impl Plain for coray::kd::KdStackItem {}
@@ -55,7 +54,6 @@ unsafe impl Plain for coray::proj::Rect {}
 const _: () = {
     use coray::kd::*;
     assert!(size_of::<KdNode>() == 8 && align_of::<KdNode>() <= ARENA_ALIGN);
-    assert!(size_of::<KdLeaf>() == 8);
     assert!(size_of::<KdRopes>() == 48);
     assert!(size_of::<KdEvent>() == 8 && align_of::<KdEvent>() <= ARENA_ALIGN);
     assert!(size_of::<KdStackItem>() == 8 && align_of::<KdStackItem>() == 4);

@@ -8,7 +8,7 @@ use crate::handle::{self, Handle, Sealed, KIND_KD};
 use crate::{guard, CorayKdRunJobs, CorayKdTree, CorayStatus};
 use coray::kd::layout::{KdArenaHeader, KdArenaLayout, KdScratchLayout, KD_HEADER_BYTES};
 use coray::kd::{
-    self, KdLeaf, KdNode, KdRopes, KdStackItem, KdTree, Traversal, KD_STACK_LEN, PACKET_LANES,
+    self, KdNode, KdRopes, KdStackItem, KdTree, Traversal, KD_STACK_LEN, PACKET_LANES,
 };
 use coray::limits::MAX_PRIMS;
 use coray::{Accel, TraceStats};
@@ -350,8 +350,8 @@ pub unsafe extern "C" fn coray_kdtree_build_jobs(
             (
                 kd::KdStorage {
                     nodes: carve::arena_mut(base, layout.nodes_offset, c.nodes),
-                    leaves: carve::arena_mut(base, layout.leaves_offset, c.leaves),
                     ropes: carve::arena_mut(base, layout.ropes_offset, c.ropes),
+                    rope_ids: carve::arena_mut(base, layout.rope_ids_offset, c.rope_ids),
                     refs: carve::arena_mut(base, layout.refs_offset, c.refs),
                 },
                 kd::KdScratch {
@@ -418,8 +418,8 @@ pub unsafe extern "C" fn coray_kdtree_open(
         let mut hd = Handle::new(KIND_KD, base as usize, l.total_bytes, &scene);
         hd.set_part::<KdArenaHeader>(0, 0, 1)?;
         hd.set_part::<KdNode>(1, l.nodes_offset, c.nodes)?;
-        hd.set_part::<KdLeaf>(2, l.leaves_offset, c.leaves)?;
-        hd.set_part::<KdRopes>(3, l.ropes_offset, c.ropes)?;
+        hd.set_part::<KdRopes>(2, l.ropes_offset, c.ropes)?;
+        hd.set_part::<u32>(3, l.rope_ids_offset, c.rope_ids)?;
         hd.set_part::<u32>(4, l.refs_offset, c.refs)?;
         // The tree must assemble from the words stored: counts, magic,
         // version, scene.
@@ -446,8 +446,8 @@ unsafe fn tree_of<'a>(h: Sealed, scene: coray::Scene<'a>) -> Result<KdTree<'a>, 
             scene,
             header.info,
             h.part::<KdNode>(1),
-            h.part::<KdLeaf>(2),
-            h.part::<KdRopes>(3),
+            h.part::<KdRopes>(2),
+            h.part::<u32>(3),
             h.part::<u32>(4),
         )?)
     }

@@ -9,7 +9,7 @@
 //! pending right children plus one split's temporaries.
 
 use super::node::{
-    KdInfo, KdLeaf, KdNode, KD_FLAG_ROPES, KD_FLAG_TRUNCATED, KD_MAGIC, KD_MAX_DEPTH, KD_VERSION,
+    KdInfo, KdNode, KD_FLAG_ROPES, KD_FLAG_TRUNCATED, KD_MAGIC, KD_MAX_DEPTH, KD_VERSION,
 };
 use super::{min_requirements, ropes, KdParams, KdScratch, KdStorage, KdTree};
 use crate::geom::{Aabb, Scene};
@@ -175,8 +175,10 @@ pub(super) struct Builder<'s, 'a> {
     params: KdParams,
     depth_limit: u32,
     pub(super) nodes: &'a mut [KdNode],
-    leaves: &'a mut [KdLeaf],
+    /// Kept for the caller (ropes are made after the build).
     ropes: &'a mut [super::KdRopes],
+    /// Kept for the caller, as `ropes`.
+    rope_ids: &'a mut [u32],
     refs: &'a mut [u32],
     pub(super) events: &'s mut [KdEvent],
     flags: &'s mut [u8],
@@ -212,16 +214,8 @@ pub(super) fn check_build(
     let min = min_requirements(scene.prim_count(), params);
     let have = [
         ("nodes", min.nodes, storage.nodes.len()),
-        ("leaves", min.leaves, storage.leaves.len()),
-        (
-            "ropes",
-            if params.ropes {
-                storage.leaves.len().max(min.ropes)
-            } else {
-                0
-            },
-            storage.ropes.len(),
-        ),
+        ("ropes", min.ropes, storage.ropes.len()),
+        ("rope_ids", min.rope_ids, storage.rope_ids.len()),
         ("refs", min.refs, storage.refs.len()),
         ("events", min.events, scratch.events.len()),
         ("prim_flags", min.prim_flags, scratch.prim_flags.len()),
@@ -309,16 +303,19 @@ impl Made {
     ) -> KdTree<'a> {
         let KdStorage {
             nodes,
-            leaves,
             ropes,
+            rope_ids,
             refs,
         } = storage;
-        let (nodes, leaves) = (&nodes[..self.node_count], &leaves[..self.leaf_count]);
-        let rope_count = if with_ropes { self.leaf_count } else { 0 };
-        let (rope_records, refs) = (&mut ropes[..rope_count], &refs[..self.ref_count]);
-        if with_ropes {
-            ropes::build_ropes(nodes, rope_records, &self.bounds);
-        }
+        let (nodes, refs) = (&nodes[..self.node_count], &refs[..self.ref_count]);
+        let (ropes, rope_ids) = if with_ropes {
+            let ropes = &mut ropes[..self.leaf_count];
+            let rope_ids = &mut rope_ids[..self.node_count];
+            ropes::build_ropes(nodes, ropes, rope_ids, &self.bounds);
+            (&*ropes, &*rope_ids)
+        } else {
+            (&[][..], &[][..])
+        };
         let mut flags = 0;
         if self.truncated {
             flags |= KD_FLAG_TRUNCATED;
@@ -349,8 +346,8 @@ impl Made {
             scene: *scene,
             info,
             nodes,
-            leaves,
-            ropes: rope_records,
+            ropes,
+            rope_ids,
             refs,
         }
     }
@@ -366,20 +363,21 @@ impl<'s, 'a> Builder<'s, 'a> {
         events: &'s mut [KdEvent],
         flags: &'s mut [u8],
     ) -> Builder<'s, 'a> {
-        let node_cap = storage
-            .nodes
-            .len()
-            .min((2 * storage.leaves.len()).saturating_sub(1))
-            .min(MAX_NODES);
-        // Below 2^30 - 1: no leaf takes the index of KdNode::FAULT's record.
-        let leaf_cap = storage.leaves.len().min(MAX_NODES / 2);
+        let mut node_cap = storage.nodes.len().min(MAX_NODES);
+        if params.ropes {
+            // A rope record per leaf, a rope index entry per node.
+            node_cap = node_cap
+                .min((2 * storage.ropes.len()).saturating_sub(1))
+                .min(storage.rope_ids.len());
+        }
+        let leaf_cap = node_cap.div_ceil(2);
         Builder {
             scene,
             params: *params,
             depth_limit: params.depth_limit(scene.prim_count()),
             nodes: storage.nodes,
-            leaves: storage.leaves,
             ropes: storage.ropes,
+            rope_ids: storage.rope_ids,
             refs: storage.refs,
             event_limit: events.len(),
             events,
@@ -407,8 +405,8 @@ impl<'s, 'a> Builder<'s, 'a> {
     pub(super) fn into_parts(self) -> (KdStorage<'a>, &'s mut [KdEvent], &'s mut [u8]) {
         let storage = KdStorage {
             nodes: self.nodes,
-            leaves: self.leaves,
             ropes: self.ropes,
+            rope_ids: self.rope_ids,
             refs: self.refs,
         };
         (storage, self.events, self.flags)
@@ -491,7 +489,6 @@ impl<'s, 'a> Builder<'s, 'a> {
     }
 
     fn make_leaf(&mut self, task: &Task) {
-        let li = self.leaf_top;
         self.leaf_top += 1;
         let first = self.ref_top;
         let (s, e) = task.axis_range(0);
@@ -502,16 +499,7 @@ impl<'s, 'a> Builder<'s, 'a> {
                 self.ref_top += 1;
             }
         }
-        self.leaves[li] = KdLeaf {
-            first_ref: first as u32,
-            ref_count: (self.ref_top - first) as u32,
-        };
-        // The leaf's box, for its ropes (a build without ropes has no slots).
-        if let Some(r) = self.ropes.get_mut(li) {
-            r.min = task.voxel.min.into();
-            r.max = task.voxel.max.into();
-        }
-        self.nodes[task.node as usize] = KdNode::leaf(li as u32);
+        self.nodes[task.node as usize] = KdNode::leaf(first as u32, (self.ref_top - first) as u32);
         self.depth = self.depth.max(task.depth);
     }
 

@@ -5,7 +5,7 @@
 //! nodes of about a quarter of the primitives at most (at most
 //! [`KD_MAX_JOBS`] of them), and makes each such node's subtree a job: its
 //! events move into a region of the event scratch of its own, and it gets its own shares of
-//! the node, leaf, rope and reference slices, in proportion to its size.
+//! the node and reference slices, in proportion to its size.
 //! Any thread may run any job ([`KdJob::run`], with a flag slice of its
 //! own); a job writes only its shares. [`KdBuild::finish`] runs the jobs
 //! nobody ran, moves every share down into the depth-first order of the
@@ -30,7 +30,7 @@
 //! ```
 
 use super::build::{build_depth_first, check_build, Builder, KdEvent, Made, Task, MAX_NODES};
-use super::node::{KdLeaf, KdNode, KdRopes, KD_MAX_DEPTH};
+use super::node::{KdNode, KD_MAX_DEPTH};
 use super::{KdParams, KdScratch, KdStorage, KdTree};
 use crate::geom::{Aabb, Scene};
 use crate::Error;
@@ -76,7 +76,6 @@ struct JobSpec {
     events: Share,
     copy: bool,
     nodes: Share,
-    leaves: Share,
     refs: Share,
 }
 
@@ -137,7 +136,6 @@ pub fn build_begin<'s, 'a>(
         events: Share::default(),
         copy: false,
         nodes: Share::default(),
-        leaves: Share::default(),
         refs: Share::default(),
     }; KD_MAX_JOBS];
     let mut stack = [root; KD_MAX_DEPTH as usize + 1];
@@ -165,7 +163,8 @@ pub fn build_begin<'s, 'a>(
                 b.events.copy_within(task.start..task.start + total, at);
                 b.event_limit = at;
                 task.start = at;
-                b.nodes[task.node as usize] = KdNode::leaf(count as u32);
+                // Marks the job's root: a leaf whose first reference is the job.
+                b.nodes[task.node as usize] = KdNode::leaf(count as u32, 0);
                 specs[count].task = task;
                 count += 1;
                 if pending == 0 {
@@ -181,7 +180,7 @@ pub fn build_begin<'s, 'a>(
     let (mut storage, events, prim_flags) = b.into_parts();
     let specs_made = &mut specs[..count];
     place_events(events, specs_made);
-    share_storage(&mut storage, top_nodes, specs_made);
+    share_storage(&mut storage, params, top_nodes, specs_made);
     Ok(KdBuild {
         scene: *scene,
         params: *params,
@@ -255,41 +254,55 @@ fn place_events(events: &mut [KdEvent], specs: &mut [JobSpec]) {
     }
 }
 
-/// The most nodes and leaves a tree may use of these slices.
-fn limits(storage: &KdStorage) -> (usize, usize) {
-    (
-        storage.nodes.len().min(MAX_NODES),
-        storage.leaves.len().min(MAX_NODES / 2),
-    )
+/// The most nodes a tree may use of these slices: as the one-pass
+/// build's [`Builder::new`] counts them (with ropes, a rope record per leaf
+/// and a rope index entry per node).
+fn node_limit(storage: &KdStorage, params: &KdParams) -> usize {
+    let mut limit = storage.nodes.len().min(MAX_NODES);
+    if params.ropes {
+        limit = limit
+            .min((2 * storage.ropes.len()).saturating_sub(1))
+            .min(storage.rope_ids.len());
+    }
+    limit
 }
 
-/// Gives each job shares of the nodes (after the top's), the leaves and
-/// ropes, and the references, in order and in proportion to its
-/// primitives; its root becomes node 0 of its share.
-fn share_storage(storage: &mut KdStorage, top_nodes: usize, specs: &mut [JobSpec]) {
-    let (node_limit, leaf_limit) = limits(storage);
-    // Every job needs a node and a leaf, an empty one too.
-    let nodes = Shares::new(node_limit.saturating_sub(top_nodes), specs, |s| {
-        s.task.prims + 1
-    });
-    let leaves = Shares::new(leaf_limit, specs, |s| s.task.prims + 1);
+/// What a job's builder is given: the build's parameters without ropes (a
+/// job has no rope slots; the ropes are made over the finished tree).
+fn job_params(params: &KdParams) -> KdParams {
+    KdParams {
+        ropes: false,
+        ..*params
+    }
+}
+
+/// Gives each job shares of the nodes (after the top's) and of the
+/// references, in order and in proportion to its primitives; its root
+/// becomes node 0 of its share.
+fn share_storage(
+    storage: &mut KdStorage,
+    params: &KdParams,
+    top_nodes: usize,
+    specs: &mut [JobSpec],
+) {
+    // Every job needs a node, an empty one too.
+    let nodes = Shares::new(
+        node_limit(storage, params).saturating_sub(top_nodes),
+        specs,
+        |s| s.task.prims + 1,
+    );
     let refs = Shares::new(storage.refs.len(), specs, |s| s.task.prims);
-    let (mut n, mut l, mut r) = (top_nodes, 0, 0);
+    let (mut n, mut r) = (top_nodes, 0);
     for s in specs.iter_mut() {
         s.nodes = Share {
             start: n,
             len: nodes.of(s),
-        };
-        s.leaves = Share {
-            start: l,
-            len: leaves.of(s),
         };
         s.refs = Share {
             start: r,
             len: refs.of(s),
         };
         n = s.nodes.end();
-        l = s.leaves.end();
         r = s.refs.end();
         s.task.node = 0;
         s.task.ref_budget = s.refs.len;
@@ -471,7 +484,8 @@ struct Layout<'l, 'a, 'e> {
     prim_flags: &'l mut [u8],
 }
 
-/// Where the finished tree stands: the next node pair, leaf and reference.
+/// Where the finished tree stands: the next node pair and reference, and
+/// the leaves so far.
 #[derive(Clone, Copy)]
 struct Tops {
     node: usize,
@@ -506,13 +520,13 @@ impl Layout<'_, '_, '_> {
                 let c = at.node;
                 at.node += 2;
                 self.storage.nodes[slot] = KdNode::interior(n.axis(), n.split(), c as u32);
-                let l = n.index() as usize;
+                let l = n.left() as usize;
                 stack[sp] = (l + 1, c + 1);
                 stack[sp + 1] = (l, c);
                 sp += 2;
                 continue;
             }
-            let j = n.index() as usize;
+            let j = n.first_ref() as usize;
             if !self.done[j].fits {
                 self.rerun(j, at)?;
             }
@@ -535,36 +549,21 @@ impl Layout<'_, '_, '_> {
     }
 
     /// Moves job `j`'s subtree to its place: its root to `slot`, its other
-    /// nodes, its leaves and references to `at`, renumbered.
+    /// nodes and its references to `at`, renumbered.
     fn place(&mut self, j: usize, slot: usize, at: Tops) {
-        let KdStorage {
-            nodes,
-            leaves,
-            ropes,
-            refs,
-        } = &mut *self.storage;
+        let KdStorage { nodes, refs, .. } = &mut *self.storage;
         let (s, d) = (&self.specs[j], &self.done[j]);
-        let (nb, lb, rb) = (at.node as u32, at.leaf as u32, at.re as u32);
+        let (nb, rb) = (at.node as u32, at.re as u32);
         let moved = |r: KdNode| {
             if r.is_leaf() {
-                KdNode::leaf(r.index() + lb)
+                KdNode::leaf(r.first_ref() + rb, r.ref_count())
             } else {
-                KdNode::interior(r.axis(), r.split(), r.index() - 1 + nb)
+                KdNode::interior(r.axis(), r.split(), r.left() - 1 + nb)
             }
         };
         nodes[slot] = moved(nodes[s.nodes.start]);
         for i in 1..d.nodes {
             nodes[at.node + i - 1] = moved(nodes[s.nodes.start + i]);
-        }
-        for i in 0..d.leaves {
-            let l = leaves[s.leaves.start + i];
-            leaves[at.leaf + i] = KdLeaf {
-                first_ref: l.first_ref + rb,
-                ref_count: l.ref_count,
-            };
-            if let Some(&r) = ropes.get(s.leaves.start + i) {
-                ropes[at.leaf + i] = r;
-            }
         }
         refs.copy_within(s.refs.start..s.refs.start + d.refs, at.re);
     }
@@ -573,10 +572,9 @@ impl Layout<'_, '_, '_> {
     /// the jobs after it (moved to the slices' ends first). None when it
     /// runs out of room again.
     fn rerun(&mut self, j: usize, at: Tops) -> Option<()> {
-        let (node_limit, leaf_limit) = limits(self.storage);
         let mut end = Tops {
-            node: node_limit,
-            leaf: leaf_limit,
+            node: node_limit(self.storage, &self.params),
+            leaf: 0,
             re: self.storage.refs.len(),
         };
         // Later jobs that made their subtrees, to the ends, last first.
@@ -585,27 +583,16 @@ impl Layout<'_, '_, '_> {
             if !d.fits {
                 continue;
             }
-            let KdStorage {
-                nodes,
-                leaves,
-                ropes,
-                refs,
-            } = &mut *self.storage;
+            let KdStorage { nodes, refs, .. } = &mut *self.storage;
             let s = &mut self.specs[k];
             end.node -= d.nodes;
-            end.leaf -= d.leaves;
             end.re -= d.refs;
             nodes.copy_within(s.nodes.start..s.nodes.start + d.nodes, end.node);
-            leaves.copy_within(s.leaves.start..s.leaves.start + d.leaves, end.leaf);
-            if !ropes.is_empty() {
-                ropes.copy_within(s.leaves.start..s.leaves.start + d.leaves, end.leaf);
-            }
             refs.copy_within(s.refs.start..s.refs.start + d.refs, end.re);
             s.nodes.start = end.node;
-            s.leaves.start = end.leaf;
             s.refs.start = end.re;
         }
-        if at.node >= end.node || at.leaf >= end.leaf || at.re > end.re {
+        if at.node >= end.node || at.re > end.re {
             return None;
         }
         let s = &mut self.specs[j];
@@ -613,16 +600,11 @@ impl Layout<'_, '_, '_> {
         let (work, parked) = self.reruns.events.split_at_mut(self.reruns.limit);
         let from = self.reruns.copy_at[j] - self.reruns.limit;
         work.get_mut(..n)?.copy_from_slice(&parked[from..from + n]);
-        let KdStorage {
-            nodes,
-            leaves,
-            ropes,
-            refs,
-        } = &mut *self.storage;
+        let KdStorage { nodes, refs, .. } = &mut *self.storage;
         let storage = KdStorage {
             nodes: &mut nodes[at.node..end.node],
-            leaves: &mut leaves[at.leaf..end.leaf],
-            ropes: rope_range(ropes, at.leaf..end.leaf),
+            ropes: &mut [],
+            rope_ids: &mut [],
             refs: &mut refs[at.re..end.re],
         };
         if storage.refs.len() < s.task.prims {
@@ -630,7 +612,7 @@ impl Layout<'_, '_, '_> {
         }
         let mut b = Builder::new(
             self.scene,
-            &self.params,
+            &job_params(&self.params),
             storage,
             work,
             &mut *self.prim_flags,
@@ -649,7 +631,6 @@ impl Layout<'_, '_, '_> {
             depth: b.depth,
         };
         s.nodes.start = at.node;
-        s.leaves.start = at.leaf;
         s.refs.start = at.re;
         Some(())
     }
@@ -661,8 +642,6 @@ pub struct KdJob<'j> {
     params: KdParams,
     task: Task,
     nodes: &'j mut [KdNode],
-    leaves: &'j mut [KdLeaf],
-    ropes: &'j mut [KdRopes],
     refs: &'j mut [u32],
     events: &'j mut [KdEvent],
     done: &'j mut JobDone,
@@ -691,16 +670,17 @@ impl KdJob<'_> {
             ran: true,
             ..JobDone::default()
         };
-        if self.nodes.is_empty() || self.leaves.is_empty() || self.refs.len() < task.prims {
+        if self.nodes.is_empty() || self.refs.len() < task.prims {
             return Ok(());
         }
         let storage = KdStorage {
             nodes: self.nodes,
-            leaves: self.leaves,
-            ropes: self.ropes,
+            ropes: &mut [],
+            rope_ids: &mut [],
             refs: self.refs,
         };
-        let mut b = Builder::new(self.scene, &self.params, storage, self.events, prim_flags);
+        let params = job_params(&self.params);
+        let mut b = Builder::new(self.scene, &params, storage, self.events, prim_flags);
         b.as_job(task.prims);
         b.run(task);
         *self.done = JobDone {
@@ -723,8 +703,6 @@ pub struct KdJobs<'j> {
     specs: &'j [JobSpec],
     done: core::slice::IterMut<'j, JobDone>,
     nodes: &'j mut [KdNode],
-    leaves: &'j mut [KdLeaf],
-    ropes: &'j mut [KdRopes],
     refs: &'j mut [u32],
     events: &'j mut [KdEvent],
 }
@@ -744,19 +722,8 @@ fn split_jobs<'j>(
         specs,
         done: done.iter_mut(),
         nodes: &mut storage.nodes[top_nodes..],
-        leaves: &mut storage.leaves[..],
-        ropes: &mut storage.ropes[..],
         refs: &mut storage.refs[..],
         events,
-    }
-}
-
-/// The rope records of leaf slots `r`: none in a build without ropes.
-fn rope_range(ropes: &mut [KdRopes], r: core::ops::Range<usize>) -> &mut [KdRopes] {
-    if ropes.is_empty() {
-        ropes
-    } else {
-        &mut ropes[r]
     }
 }
 
@@ -786,11 +753,6 @@ impl<'j> Iterator for KdJobs<'j> {
             params: self.params,
             task: s.task,
             nodes: take_front(&mut self.nodes, s.nodes.len),
-            leaves: take_front(&mut self.leaves, s.leaves.len),
-            ropes: {
-                let n = s.leaves.len.min(self.ropes.len());
-                take_front(&mut self.ropes, n)
-            },
             refs: take_front(&mut self.refs, s.refs.len),
             events: &mut region[..s.working_events()],
             done: self.done.next()?,

@@ -1,8 +1,9 @@
-//! Byte layouts of kd-tree arenas: `[KdArenaHeader | nodes | leaves |
-//! ropes | refs]` for the tree, `[prim flags | events]` for a build's
-//! scratch. Counts in, bytes out, checked ([`crate::arena::Parts`]).
+//! Byte layouts of kd-tree arenas: `[KdArenaHeader | nodes | ropes |
+//! rope ids | refs]` for the tree (the two rope parts empty without
+//! ropes), `[prim flags | events]` for a build's scratch. Counts in, bytes
+//! out, checked ([`crate::arena::Parts`]).
 
-use super::{KdEvent, KdInfo, KdLeaf, KdNode, KdRequirements, KdRopes, KD_MAGIC, KD_VERSION};
+use super::{KdEvent, KdInfo, KdNode, KdRequirements, KdRopes, KD_MAGIC, KD_VERSION};
 use crate::arena::Parts;
 use crate::Error;
 use core::mem::size_of;
@@ -18,10 +19,10 @@ pub struct KdArenaLayout {
     pub counts: KdRequirements,
     /// Offset of the nodes.
     pub nodes_offset: usize,
-    /// Offset of the leaf records.
-    pub leaves_offset: usize,
-    /// Offset of the ropes.
+    /// Offset of the rope records.
     pub ropes_offset: usize,
+    /// Offset of the rope index (a `u32` per node).
+    pub rope_ids_offset: usize,
     /// Offset of the references.
     pub refs_offset: usize,
     /// Bytes the layout covers.
@@ -29,20 +30,20 @@ pub struct KdArenaLayout {
 }
 
 impl KdArenaLayout {
-    /// Layout of the tree part (nodes, leaves, ropes, refs) of `counts`, or
-    /// `None` past [`crate::limits::MAX_ARENA_BYTES`].
+    /// Layout of the tree part (nodes, ropes, rope ids, refs) of `counts`,
+    /// or `None` past [`crate::limits::MAX_ARENA_BYTES`].
     pub fn of(counts: &KdRequirements) -> Option<KdArenaLayout> {
         const _: () = assert!(size_of::<KdArenaHeader>() <= KD_HEADER_BYTES);
         let mut p = Parts::after(KD_HEADER_BYTES);
         let nodes_offset = p.push::<KdNode>(counts.nodes)?;
-        let leaves_offset = p.push::<KdLeaf>(counts.leaves)?;
         let ropes_offset = p.push::<KdRopes>(counts.ropes)?;
+        let rope_ids_offset = p.push::<u32>(counts.rope_ids)?;
         let refs_offset = p.push::<u32>(counts.refs)?;
         Some(KdArenaLayout {
             counts: *counts,
             nodes_offset,
-            leaves_offset,
             ropes_offset,
+            rope_ids_offset,
             refs_offset,
             total_bytes: p.total()?,
         })
@@ -60,11 +61,15 @@ impl KdArenaLayout {
             let lerp = |a: usize, b: usize| {
                 a + ((b.saturating_sub(a)) as u128 * k as u128 / 1024) as usize
             };
-            let leaves = lerp(min.leaves, ideal.leaves);
+            let nodes = lerp(min.nodes, ideal.nodes);
             KdArenaLayout::of(&KdRequirements {
-                nodes: lerp(min.nodes, ideal.nodes).min(2 * leaves - 1),
-                leaves,
-                ropes: if ideal.ropes > 0 { leaves } else { 0 },
+                nodes,
+                ropes: if ideal.ropes > 0 {
+                    nodes.div_ceil(2)
+                } else {
+                    0
+                },
+                rope_ids: if ideal.rope_ids > 0 { nodes } else { 0 },
                 refs: lerp(min.refs, ideal.refs),
                 events: 0,
                 prim_flags: 0,
@@ -91,8 +96,8 @@ impl KdArenaLayout {
         let n = |x: u32| x as usize;
         KdArenaLayout::of(&KdRequirements {
             nodes: n(info.node_count),
-            leaves: n(info.leaf_count),
             ropes: n(info.rope_count()),
+            rope_ids: n(info.rope_id_count()),
             refs: n(info.ref_count),
             events: 0,
             prim_flags: 0,
@@ -113,7 +118,7 @@ impl KdArenaLayout {
     pub fn pack(&self, info: &KdInfo, arena: &mut [u8]) -> Option<KdArenaLayout> {
         let tight = KdArenaLayout::tight(info)?;
         let (c, t) = (&self.counts, &tight.counts);
-        if t.nodes > c.nodes || t.leaves > c.leaves || t.refs > c.refs {
+        if t.nodes > c.nodes || t.ropes > c.ropes || t.rope_ids > c.rope_ids || t.refs > c.refs {
             return None;
         }
         let arena = arena.get_mut(..self.total_bytes)?;
@@ -127,14 +132,14 @@ impl KdArenaLayout {
                 t.nodes * size_of::<KdNode>(),
             ),
             (
-                self.leaves_offset,
-                tight.leaves_offset,
-                t.leaves * size_of::<KdLeaf>(),
-            ),
-            (
                 self.ropes_offset,
                 tight.ropes_offset,
                 t.ropes * size_of::<KdRopes>(),
+            ),
+            (
+                self.rope_ids_offset,
+                tight.rope_ids_offset,
+                t.rope_ids * size_of::<u32>(),
             ),
             (
                 self.refs_offset,
@@ -150,8 +155,8 @@ impl KdArenaLayout {
         // bytes depend on the tree alone.
         let ends = parts.map(|(_, to, bytes)| to + bytes);
         let starts = [
-            tight.leaves_offset,
             tight.ropes_offset,
+            tight.rope_ids_offset,
             tight.refs_offset,
             tight.total_bytes,
         ];
@@ -215,19 +220,19 @@ pub struct KdArenaHeader {
     pub info: KdInfo,
     /// Bytes of the arena the layout covers.
     pub layout_bytes: u32,
-    /// Capacity of the node part.
+    /// Capacity of the node part (and of the rope index when the info's
+    /// [`KdInfo::has_ropes`]; else that part is empty).
     pub nodes_cap: u32,
-    /// Capacity of the leaf part, and of the rope part when the info's
-    /// [`KdInfo::has_ropes`] (else that part is empty).
-    pub leaves_cap: u32,
+    /// Capacity of the rope part (0 without ropes).
+    pub ropes_cap: u32,
     /// Capacity of the reference part.
     pub refs_cap: u32,
     /// Byte offset of the nodes.
     pub nodes_offset: u32,
-    /// Byte offset of the leaf records.
-    pub leaves_offset: u32,
     /// Byte offset of the ropes.
     pub ropes_offset: u32,
+    /// Byte offset of the rope index.
+    pub rope_ids_offset: u32,
     /// Byte offset of the references.
     pub refs_offset: u32,
 }
@@ -241,11 +246,11 @@ impl KdArenaHeader {
             info,
             layout_bytes: layout.total_bytes as u32,
             nodes_cap: c.nodes as u32,
-            leaves_cap: c.leaves as u32,
+            ropes_cap: c.ropes as u32,
             refs_cap: c.refs as u32,
             nodes_offset: layout.nodes_offset as u32,
-            leaves_offset: layout.leaves_offset as u32,
             ropes_offset: layout.ropes_offset as u32,
+            rope_ids_offset: layout.rope_ids_offset as u32,
             refs_offset: layout.refs_offset as u32,
         }
     }
@@ -262,15 +267,12 @@ impl KdArenaHeader {
         if self.info.version != KD_VERSION {
             return corrupt("version");
         }
+        // With ropes, the rope index has an entry per node slot.
+        let ropes = self.info.has_ropes();
         let counts = KdRequirements {
             nodes: self.nodes_cap as usize,
-            leaves: self.leaves_cap as usize,
-            // The ropes' part is as long as the leaves' when the tree has ropes.
-            ropes: if self.info.has_ropes() {
-                self.leaves_cap as usize
-            } else {
-                0
-            },
+            ropes: self.ropes_cap as usize,
+            rope_ids: if ropes { self.nodes_cap as usize } else { 0 },
             refs: self.refs_cap as usize,
             events: 0,
             prim_flags: 0,
@@ -286,7 +288,7 @@ impl KdArenaHeader {
         }
         let i = &self.info;
         if i.node_count > self.nodes_cap
-            || i.leaf_count > self.leaves_cap
+            || i.rope_count() > self.ropes_cap
             || i.ref_count > self.refs_cap
         {
             return corrupt("counts");
@@ -299,11 +301,12 @@ impl KdArenaHeader {
 mod tests {
     use super::*;
 
-    fn counts(nodes: usize, leaves: usize, refs: usize) -> KdRequirements {
+    /// A tree with ropes: `ropes` records, one rope index entry per node.
+    fn counts(nodes: usize, ropes: usize, refs: usize) -> KdRequirements {
         KdRequirements {
             nodes,
-            leaves,
-            ropes: leaves,
+            ropes,
+            rope_ids: nodes,
             refs,
             events: 0,
             prim_flags: 0,
@@ -314,13 +317,13 @@ mod tests {
     fn parts_follow_the_header_aligned() {
         let l = KdArenaLayout::of(&counts(3, 2, 5)).unwrap();
         assert_eq!(l.nodes_offset, KD_HEADER_BYTES);
-        assert_eq!(l.leaves_offset, KD_HEADER_BYTES + 32);
-        assert_eq!(l.ropes_offset, l.leaves_offset + 16);
-        assert_eq!(l.refs_offset, l.ropes_offset + 96);
+        assert_eq!(l.ropes_offset, KD_HEADER_BYTES + 32);
+        assert_eq!(l.rope_ids_offset, l.ropes_offset + 96);
+        assert_eq!(l.refs_offset, l.rope_ids_offset + 16);
         assert_eq!(l.total_bytes, l.refs_offset + 32);
         assert!([
-            l.leaves_offset,
             l.ropes_offset,
+            l.rope_ids_offset,
             l.refs_offset,
             l.total_bytes
         ]
@@ -357,19 +360,22 @@ mod tests {
             ..KdInfo::default()
         };
         let tight = KdArenaLayout::tight(&info).unwrap();
-        // Without ropes the rope part is empty: the references follow the leaves.
+        // Without ropes both rope parts are empty: the references follow
+        // the nodes.
         let plain = KdArenaLayout::tight(&KdInfo { flags: 0, ..info }).unwrap();
-        assert_eq!(plain.counts.ropes, 0);
+        assert_eq!((plain.counts.ropes, plain.counts.rope_ids), (0, 0));
         assert_eq!(plain.ropes_offset, plain.refs_offset);
-        assert_eq!(plain.total_bytes + 3 * 48, tight.total_bytes);
+        assert_eq!(plain.rope_ids_offset, plain.refs_offset);
+        // 3 rope records, 5 rope index entries padded to 32 bytes.
+        assert_eq!(plain.total_bytes + 3 * 48 + 32, tight.total_bytes);
         // Every used byte of a part holds its part's tag and its index.
         let mut arena = [0xEEu8; 1024];
         assert!(room.total_bytes < arena.len());
         let used = |l: &KdArenaLayout| {
             [
                 (l.nodes_offset, 5 * 8),
-                (l.leaves_offset, 3 * 8),
                 (l.ropes_offset, 3 * 48),
+                (l.rope_ids_offset, 5 * 4),
                 (l.refs_offset, 7 * 4),
             ]
         };

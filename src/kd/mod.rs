@@ -21,8 +21,8 @@ mod validate;
 pub use build::{build, build_depth_first, KdEvent};
 pub use build_jobs::{build_begin, KdBuild, KdJob, KdJobReport, KdJobs, KD_MAX_JOBS};
 pub use node::{
-    KdInfo, KdLeaf, KdNode, KdRopes, KdStackItem, KD_FLAG_ROPES, KD_FLAG_TRUNCATED, KD_MAGIC,
-    KD_MAX_DEPTH, KD_STACK_LEN, KD_VERSION, NO_NODE,
+    KdInfo, KdNode, KdRopes, KdStackItem, KD_FLAG_ROPES, KD_FLAG_TRUNCATED, KD_MAGIC, KD_MAX_DEPTH,
+    KD_STACK_LEN, KD_VERSION, NO_NODE,
 };
 pub use packet::LANES as PACKET_LANES;
 pub use traverse::{Decision, Traversal};
@@ -151,16 +151,17 @@ impl Default for KdParams {
 }
 
 /// Element counts of the slices a build needs. The tree's own slices
-/// (`nodes`, `leaves`, `ropes`, `refs`) are kept; the scratch slices
+/// (`nodes`, `ropes`, `rope_ids`, `refs`) are kept; the scratch slices
 /// (`events`, `prim_flags`) may be reused once the build returns.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct KdRequirements {
     /// [`KdNode`] slots.
     pub nodes: usize,
-    /// [`KdLeaf`] slots.
-    pub leaves: usize,
-    /// [`KdRopes`] slots: as many as `leaves` for a build with ropes, else 0.
+    /// [`KdRopes`] slots, one per leaf a tree of `nodes` nodes can have
+    /// (`(nodes + 1) / 2`), for a build with ropes; else 0.
     pub ropes: usize,
+    /// Rope index slots (`u32`), one per node, for a build with ropes; else 0.
+    pub rope_ids: usize,
     /// Primitive references (`u32`).
     pub refs: usize,
     /// Build scratch: [`KdEvent`] slots.
@@ -182,10 +183,11 @@ pub fn requirements(prim_count: usize, params: &KdParams) -> KdRequirements {
     let n = prim_count.max(1);
     let refs = n * params.refs_per_prim.max(1) as usize;
     let leaves = 2 * refs + 1;
+    let nodes = 2 * leaves - 1;
     KdRequirements {
-        nodes: 2 * leaves - 1,
-        leaves,
+        nodes,
         ropes: if params.ropes { leaves } else { 0 },
+        rope_ids: if params.ropes { nodes } else { 0 },
         refs,
         events: 12 * refs,
         prim_flags: prim_count,
@@ -198,8 +200,8 @@ pub fn requirements(prim_count: usize, params: &KdParams) -> KdRequirements {
 pub fn min_requirements(prim_count: usize, params: &KdParams) -> KdRequirements {
     KdRequirements {
         nodes: 1,
-        leaves: 1,
         ropes: params.ropes as usize,
+        rope_ids: params.ropes as usize,
         refs: prim_count,
         events: 6 * prim_count,
         prim_flags: prim_count,
@@ -211,11 +213,13 @@ pub fn min_requirements(prim_count: usize, params: &KdParams) -> KdRequirements 
 pub struct KdStorage<'a> {
     /// Nodes.
     pub nodes: &'a mut [KdNode],
-    /// Leaf records.
-    pub leaves: &'a mut [KdLeaf],
-    /// Ropes and boxes, one per leaf record (at least as long as `leaves`)
-    /// for a build with ropes; ignored (may be empty) for one without.
+    /// Ropes and boxes, one per leaf, for a build with ropes; ignored (may
+    /// be empty) for one without. A build makes at most this many leaves.
     pub ropes: &'a mut [KdRopes],
+    /// Each node's rope record (leaves) or [`NO_NODE`] (interior nodes),
+    /// for a build with ropes; ignored (may be empty) for one without. A
+    /// build makes at most this many nodes.
+    pub rope_ids: &'a mut [u32],
     /// Primitive references.
     pub refs: &'a mut [u32],
 }
@@ -237,10 +241,10 @@ pub struct KdTree<'a> {
     pub(crate) info: KdInfo,
     /// `info.node_count` nodes; node 0 is the root.
     pub(crate) nodes: &'a [KdNode],
-    /// `info.leaf_count` leaf records.
-    pub(crate) leaves: &'a [KdLeaf],
     /// `info.rope_count()` rope records: one per leaf, or none.
     pub(crate) ropes: &'a [KdRopes],
+    /// `info.rope_id_count()` entries: each node's rope record, or none.
+    pub(crate) rope_ids: &'a [u32],
     /// `info.ref_count` references (global primitive indices).
     pub(crate) refs: &'a [u32],
 }
@@ -256,8 +260,8 @@ impl<'a> KdTree<'a> {
         scene: Scene<'a>,
         info: KdInfo,
         nodes: &'a [KdNode],
-        leaves: &'a [KdLeaf],
         ropes: &'a [KdRopes],
+        rope_ids: &'a [u32],
         refs: &'a [u32],
     ) -> Result<KdTree<'a>, Error> {
         if info.magic != KD_MAGIC {
@@ -268,8 +272,8 @@ impl<'a> KdTree<'a> {
         }
         if info.node_count == 0
             || info.node_count as usize > nodes.len()
-            || info.leaf_count as usize > leaves.len()
             || info.rope_count() as usize > ropes.len()
+            || info.rope_id_count() as usize > rope_ids.len()
             || info.ref_count as usize > refs.len()
             || info.depth > KD_MAX_DEPTH
         {
@@ -279,8 +283,8 @@ impl<'a> KdTree<'a> {
             scene,
             info,
             nodes: &nodes[..info.node_count as usize],
-            leaves: &leaves[..info.leaf_count as usize],
             ropes: &ropes[..info.rope_count() as usize],
+            rope_ids: &rope_ids[..info.rope_id_count() as usize],
             refs: &refs[..info.ref_count as usize],
         };
         tree.check_scene(&scene)?;
@@ -310,9 +314,10 @@ impl<'a> KdTree<'a> {
         &self.scene
     }
 
-    /// The tree's parts: nodes (node 0 the root), leaf records, their
-    /// boxes and ropes, and the references (global primitive indices).
-    pub fn parts(&self) -> (&'a [KdNode], &'a [KdLeaf], &'a [KdRopes], &'a [u32]) {
-        (self.nodes, self.leaves, self.ropes, self.refs)
+    /// The tree's parts: nodes (node 0 the root), the leaves' boxes and
+    /// ropes and each node's rope record (both empty without ropes), and
+    /// the references (global primitive indices).
+    pub fn parts(&self) -> (&'a [KdNode], &'a [KdRopes], &'a [u32], &'a [u32]) {
+        (self.nodes, self.ropes, self.rope_ids, self.refs)
     }
 }

@@ -31,24 +31,26 @@ pub struct KdStackItem {
 }
 
 /// One node in 8 bytes. `word & 3` is the split axis (0, 1, 2) or 3 for a
-/// leaf; `word >> 2` is the index of the left child (the right child follows
-/// it) or of the leaf record. `data` holds the split position's bits.
+/// leaf. An interior node's `word >> 2` is the index of its left child (the
+/// right child follows it) and `data` the split position's bits; a leaf's
+/// `word >> 2` is its number of references and `data` the first of them:
+/// a leaf is whole in its node, so a traversal reads the references next.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[repr(C)]
 pub struct KdNode {
-    /// Axis or leaf tag in the low two bits, child or leaf index above.
+    /// Axis or leaf tag in the low two bits; left child or reference count above.
     pub word: u32,
-    /// `f32::to_bits` of the split position (0 for a leaf).
+    /// `f32::to_bits` of the split position, or a leaf's first reference.
     pub data: u32,
 }
 
 impl KdNode {
-    /// What a traversal reads for a node index past the tree: a leaf whose
-    /// record no tree has (builds make fewer than 2^30 - 1 leaves), so the
-    /// walk stops there with a fault.
+    /// What a traversal reads for a node index past the tree: a leaf of
+    /// 2^30 - 1 references from the 2^32 - 1st, past any tree's (an arena
+    /// stops at 4 GiB), so the walk stops there with a fault.
     pub const FAULT: KdNode = KdNode {
         word: u32::MAX,
-        data: 0,
+        data: u32::MAX,
     };
 
     /// An interior node splitting `axis` at `split`, children at `left` and `left + 1`.
@@ -59,11 +61,12 @@ impl KdNode {
         }
     }
 
-    /// A leaf whose primitives are in leaf record `leaf`.
-    pub fn leaf(leaf: u32) -> KdNode {
+    /// A leaf holding references `first_ref..first_ref + ref_count`
+    /// (`ref_count` below 2^30).
+    pub fn leaf(first_ref: u32, ref_count: u32) -> KdNode {
         KdNode {
-            word: (leaf << 2) | 3,
-            data: 0,
+            word: (ref_count << 2) | 3,
+            data: first_ref,
         }
     }
 
@@ -79,10 +82,22 @@ impl KdNode {
         (self.word & 3) as usize
     }
 
-    /// Left child (interior) or leaf record index (leaf).
+    /// Left child of an interior node (the right one is `left() + 1`).
     #[inline]
-    pub fn index(&self) -> u32 {
+    pub fn left(&self) -> u32 {
         self.word >> 2
+    }
+
+    /// A leaf's number of references.
+    #[inline]
+    pub fn ref_count(&self) -> u32 {
+        self.word >> 2
+    }
+
+    /// A leaf's first reference.
+    #[inline]
+    pub fn first_ref(&self) -> u32 {
+        self.data
     }
 
     /// Split position of an interior node.
@@ -90,16 +105,6 @@ impl KdNode {
     pub fn split(&self) -> f32 {
         f32::from_bits(self.data)
     }
-}
-
-/// Where a leaf's primitive references are: `refs[first_ref..first_ref + ref_count]`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-#[repr(C)]
-pub struct KdLeaf {
-    /// First reference.
-    pub first_ref: u32,
-    /// Number of references (0 for an empty leaf).
-    pub ref_count: u32,
 }
 
 /// A leaf's box and its six ropes (Havran; Popov et al. 2007): for each face
@@ -116,7 +121,7 @@ pub struct KdRopes {
     pub max: [f32; 3],
 }
 
-/// What a traversal reads for a leaf record past the tree: no ropes and a
+/// What a traversal reads for a rope record past the tree: no ropes and a
 /// NaN box, which no ray enters or leaves.
 pub(crate) static FAULT_ROPES: KdRopes = KdRopes {
     neighbor: [NO_NODE; 6],
@@ -154,7 +159,7 @@ impl KdRopes {
 /// Magic word of a kd-tree's [`KdInfo`]: "CRKD".
 pub const KD_MAGIC: u32 = u32::from_le_bytes(*b"CRKD");
 /// Layout version of [`KdInfo`] and the node types.
-pub const KD_VERSION: u32 = 3;
+pub const KD_VERSION: u32 = 4;
 
 /// Flag in [`KdInfo::flags`]: a capacity stopped splitting somewhere.
 pub const KD_FLAG_TRUNCATED: u32 = 1;
@@ -182,8 +187,7 @@ pub struct KdInfo {
     pub valid_prim_count: u32,
     /// Nodes used.
     pub node_count: u32,
-    /// Leaves used (each has a [`KdLeaf`], and a [`KdRopes`] when
-    /// [`KdInfo::has_ropes`]).
+    /// Leaves (each has a [`KdRopes`] record when [`KdInfo::has_ropes`]).
     pub leaf_count: u32,
     /// References used.
     pub ref_count: u32,
@@ -256,6 +260,16 @@ impl KdInfo {
             0
         }
     }
+
+    /// Entries of the tree's rope index (node to rope record): one per
+    /// node when it has ropes, else none.
+    pub fn rope_id_count(&self) -> u32 {
+        if self.has_ropes() {
+            self.node_count
+        } else {
+            0
+        }
+    }
 }
 
 #[cfg(test)]
@@ -271,15 +285,17 @@ mod tests {
                 let n = KdNode::interior(axis, split, left);
                 assert!(!n.is_leaf());
                 assert_eq!(
-                    (n.axis(), n.split().to_bits(), n.index()),
+                    (n.axis(), n.split().to_bits(), n.left()),
                     (axis, split.to_bits(), left)
                 );
             }
         }
-        let l = KdNode::leaf((1 << 30) - 1);
-        assert!(l.is_leaf() && l.index() == (1 << 30) - 1);
-        // FAULT is a leaf whose record no build makes.
-        assert!(KdNode::FAULT.is_leaf() && KdNode::FAULT.index() > (1 << 30) - 1 - 1);
+        for (first, count) in [(0u32, 0u32), (u32::MAX, (1 << 30) - 1), (77, 3)] {
+            let l = KdNode::leaf(first, count);
+            assert!(l.is_leaf() && (l.first_ref(), l.ref_count()) == (first, count));
+        }
+        // FAULT is a leaf with more references than any tree holds.
+        assert!(KdNode::FAULT.is_leaf() && KdNode::FAULT.ref_count() == (1 << 30) - 1);
         assert_eq!(core::mem::size_of::<KdNode>(), 8);
         assert_eq!(core::mem::size_of::<KdStackItem>(), 8);
     }

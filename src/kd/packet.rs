@@ -761,7 +761,7 @@ impl KdTree<'_> {
                 for (n, &m) in lane_steps.iter_mut().zip(on.0.iter()) {
                     *n += m & 1;
                 }
-                let (a, s, left) = (nd.axis(), nd.split(), nd.index());
+                let (a, s, left) = (nd.axis(), nd.split(), nd.left());
                 let right = left.wrapping_add(1);
                 let (near, far) = if p.up[a] {
                     (left, right)

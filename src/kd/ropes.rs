@@ -15,7 +15,7 @@ fn push_down(nodes: &[KdNode], mut r: u32, face: usize, b: &Aabb) -> u32 {
         if node.is_leaf() {
             break;
         }
-        let (axis, split, left) = (node.axis(), node.split(), node.index());
+        let (axis, split, left) = (node.axis(), node.split(), node.left());
         r = if axis == face_axis {
             // The neighbour lies beyond the face: its child on our side touches it.
             if positive {
@@ -34,8 +34,16 @@ fn push_down(nodes: &[KdNode], mut r: u32, face: usize, b: &Aabb) -> u32 {
     r
 }
 
-/// Fills the neighbour links of every leaf record (boxes are already set).
-pub(super) fn build_ropes(nodes: &[KdNode], ropes: &mut [KdRopes], root: &Aabb) {
+/// Makes the rope records of a built tree: one per leaf, numbered in
+/// preorder (left first), each with the leaf's box and its six links, and
+/// `rope_ids[node]` = the record of each leaf node ([`NO_NODE`] for an
+/// interior node). `ropes` holds a slot per leaf, `rope_ids` per node.
+pub(super) fn build_ropes(
+    nodes: &[KdNode],
+    ropes: &mut [KdRopes],
+    rope_ids: &mut [u32],
+    root: &Aabb,
+) {
     #[derive(Clone, Copy)]
     struct Frame {
         node: u32,
@@ -48,6 +56,7 @@ pub(super) fn build_ropes(nodes: &[KdNode], ropes: &mut [KdRopes], root: &Aabb) 
         links: [NO_NODE; 6],
     }; KD_MAX_DEPTH as usize + 2];
     let mut sp = 1;
+    let mut next_rope = 0u32;
     while sp > 0 {
         sp -= 1;
         let Frame {
@@ -60,10 +69,17 @@ pub(super) fn build_ropes(nodes: &[KdNode], ropes: &mut [KdRopes], root: &Aabb) 
         }
         let n = nodes[node as usize];
         if n.is_leaf() {
-            ropes[n.index() as usize].neighbor = links;
+            ropes[next_rope as usize] = KdRopes {
+                neighbor: links,
+                min: bounds.min.into(),
+                max: bounds.max.into(),
+            };
+            rope_ids[node as usize] = next_rope;
+            next_rope += 1;
             continue;
         }
-        let (axis, split, left) = (n.axis(), n.split(), n.index());
+        rope_ids[node as usize] = NO_NODE;
+        let (axis, split, left) = (n.axis(), n.split(), n.left());
         let mut lb = bounds;
         lb.max[axis] = split;
         let mut rb = bounds;

@@ -140,8 +140,8 @@ pub enum Decision {
 pub(crate) trait Recorder {
     /// An interior node was visited and decided `d`.
     fn interior(&mut self, node: u32, d: Decision);
-    /// A leaf was visited: its node and its leaf record index.
-    fn leaf(&mut self, node: u32, leaf: u32);
+    /// A leaf was visited: its node.
+    fn leaf(&mut self, node: u32);
     /// A node was pushed but not visited: the ray ended first.
     fn unvisited(&mut self, node: u32);
 }
@@ -153,7 +153,7 @@ impl Recorder for NoRecord {
     #[inline(always)]
     fn interior(&mut self, _: u32, _: Decision) {}
     #[inline(always)]
-    fn leaf(&mut self, _: u32, _: u32) {}
+    fn leaf(&mut self, _: u32) {}
     #[inline(always)]
     fn unvisited(&mut self, _: u32) {}
 }
@@ -279,31 +279,30 @@ impl<'a> KdTree<'a> {
         self.nodes.get(i as usize).copied().unwrap_or(KdNode::FAULT)
     }
 
-    /// The box and ropes of leaf record `leaf` ([`KdRopes::FAULT`] past the
-    /// records: a NaN box no ray enters or leaves, no ropes).
+    /// The box and ropes of leaf node `leaf` (the FAULT record, a NaN box
+    /// no ray enters or leaves and no ropes, for a node without one).
     #[inline]
     pub(crate) fn rope(&self, leaf: u32) -> &super::KdRopes {
-        self.ropes
+        self.rope_ids
             .get(leaf as usize)
+            .and_then(|&r| self.ropes.get(r as usize))
             .unwrap_or(&super::node::FAULT_ROPES)
     }
 
-    /// Whether leaf record `leaf` holds no primitive (a missing one holds none).
+    /// Whether node `leaf` is a leaf that holds no primitive (a missing one
+    /// holds none).
     #[inline]
     pub(crate) fn leaf_is_empty(&self, leaf: u32) -> bool {
-        self.leaves
-            .get(leaf as usize)
-            .is_none_or(|l| l.ref_count == 0)
+        self.leaf_refs(self.node(leaf)).is_none_or(|r| r.is_empty())
     }
 
-    /// The primitive references of leaf node `nd`, or `None` when its leaf
-    /// record or reference range lies outside the tree (a fault).
+    /// The primitive references of leaf node `nd`, or `None` when its
+    /// reference range lies outside the tree (a fault).
     #[inline]
     pub(crate) fn leaf_refs(&self, nd: KdNode) -> Option<&[u32]> {
-        let l = self.leaves.get(nd.index() as usize)?;
         self.refs
-            .get(l.first_ref as usize..)?
-            .get(..l.ref_count as usize)
+            .get(nd.first_ref() as usize..)?
+            .get(..nd.ref_count() as usize)
     }
 
     /// The part of `r`'s segment inside the scene's box
@@ -394,7 +393,7 @@ impl<'a> KdTree<'a> {
                 }
                 budget -= 1;
                 steps.interior += 1;
-                let (a, s, left) = (nd.axis() & 3, nd.split(), nd.index());
+                let (a, s, left) = (nd.axis() & 3, nd.split(), nd.left());
                 let right = left.wrapping_add(1);
                 let ex_t = stack[ex].t;
                 // Where the ray meets the plane: the segment [en_t, ex_t]
@@ -445,7 +444,7 @@ impl<'a> KdTree<'a> {
                 nd = self.node(node);
             }
             steps.leaves += 1;
-            rec.leaf(node, nd.index());
+            rec.leaf(node);
             let Some(refs) = self.leaf_refs(nd).filter(|_| budget > 0) else {
                 steps.fault();
                 return true;
@@ -476,24 +475,19 @@ impl<'a> KdTree<'a> {
         }
     }
 
-    /// Descends from `node` to the leaf holding `p`; a point on a split
-    /// plane goes where the ray heads. `None` when the ray lies in the
-    /// plane; [`KdNode::FAULT`] when the descent is deeper than any tree.
+    /// Descends from `node` to the leaf node holding `p`; a point on a
+    /// split plane goes where the ray heads. `None` when the ray lies in the
+    /// plane; [`NO_NODE`] (whose node is [`KdNode::FAULT`]) when the descent
+    /// is deeper than any tree.
     #[inline]
-    pub(crate) fn locate(
-        &self,
-        mut node: u32,
-        p: Vec3,
-        d: Vec3,
-        steps: &mut Steps,
-    ) -> Option<KdNode> {
+    pub(crate) fn locate(&self, mut node: u32, p: Vec3, d: Vec3, steps: &mut Steps) -> Option<u32> {
         for _ in 0..=KD_MAX_DEPTH {
             let nd = self.node(node);
             if nd.is_leaf() {
-                return Some(nd);
+                return Some(node);
             }
             steps.interior += 1;
-            let (a, s, left) = (nd.axis(), nd.split(), nd.index());
+            let (a, s, left) = (nd.axis(), nd.split(), nd.left());
             node = if p[a] < s || (p[a] == s && d[a] < 0.0) {
                 left
             } else if p[a] > s || d[a] > 0.0 {
@@ -502,7 +496,7 @@ impl<'a> KdTree<'a> {
                 return None;
             };
         }
-        Some(KdNode::FAULT)
+        Some(NO_NODE)
     }
 
     /// Descends from `node` to the leaf holding the ray's point at `t`,
@@ -518,14 +512,14 @@ impl<'a> KdTree<'a> {
         r: &PreparedRay,
         t: f32,
         steps: &mut Steps,
-    ) -> Option<KdNode> {
+    ) -> Option<u32> {
         for _ in 0..=KD_MAX_DEPTH {
             let nd = self.node(node);
             if nd.is_leaf() {
-                return Some(nd);
+                return Some(node);
             }
             steps.interior += 1;
-            let (a, s, left) = (nd.axis(), nd.split(), nd.index());
+            let (a, s, left) = (nd.axis(), nd.split(), nd.left());
             let (o, d) = (r.origin[a], r.dir[a]);
             let below = if d == 0.0 {
                 if o == s {
@@ -545,13 +539,13 @@ impl<'a> KdTree<'a> {
             };
             node = if below { left } else { left.wrapping_add(1) };
         }
-        Some(KdNode::FAULT)
+        Some(NO_NODE)
     }
 
-    /// Where the ray leaves leaf `nd`: the signed distance and the face.
+    /// Where the ray leaves leaf node `leaf`: the signed distance and the face.
     #[inline]
-    pub(crate) fn leaf_exit(&self, r: &PreparedRay, nd: KdNode) -> (f32, usize) {
-        let rp = self.rope(nd.index());
+    pub(crate) fn leaf_exit(&self, r: &PreparedRay, leaf: u32) -> (f32, usize) {
+        let rp = self.rope(leaf);
         let mut t_exit = f32::INFINITY;
         let mut face = 0;
         for a in 0..3 {
@@ -569,19 +563,19 @@ impl<'a> KdTree<'a> {
         (t_exit, face)
     }
 
-    /// The leaf beyond face `face` of leaf `nd` where the ray goes on after
-    /// `t_exit`: `Ok(None)` at the scene's boundary, `Err(())` when the ray
-    /// lies in a split plane there.
+    /// The leaf node beyond face `face` of leaf node `leaf` where the ray
+    /// goes on after `t_exit`: `Ok(None)` at the scene's boundary, `Err(())`
+    /// when the ray lies in a split plane there.
     #[inline]
     pub(crate) fn rope_next(
         &self,
         r: &PreparedRay,
-        nd: KdNode,
+        leaf: u32,
         t_exit: f32,
         face: usize,
         steps: &mut Steps,
-    ) -> Result<Option<KdNode>, ()> {
-        let rp = self.rope(nd.index());
+    ) -> Result<Option<u32>, ()> {
+        let rp = self.rope(leaf);
         let next = rp.neighbor[face];
         if next == NO_NODE {
             return Ok(None);
@@ -590,52 +584,52 @@ impl<'a> KdTree<'a> {
         self.locate(next, p, r.dir, steps).map(Some).ok_or(())
     }
 
-    /// Leaf to leaf by ropes from leaf `first` (not yet visited) until the
-    /// visitor stops or the segment ends at `t1`.
+    /// Leaf to leaf by ropes from leaf node `first` (not yet visited) until
+    /// the visitor stops or the segment ends at `t1`.
     pub(crate) fn rope_walk<V: LeafVisitor>(
         &self,
         v: &mut V,
-        first: KdNode,
+        first: u32,
         t1: f32,
         steps: &mut Steps,
     ) -> RopeEnd {
         let r = *v.ray();
-        self.rope_walk_by(v, first, t1, steps, |nd, t_exit, face, steps| {
-            self.rope_next(&r, nd, t_exit, face, steps)
+        self.rope_walk_by(v, first, t1, steps, |leaf, t_exit, face, steps| {
+            self.rope_next(&r, leaf, t_exit, face, steps)
         })
     }
 
     /// [`KdTree::rope_walk`] with its step across a face given: `next(leaf,
-    /// t_exit, face, steps)` is the leaf beyond, as [`KdTree::rope_next`]
-    /// answers (guided ropes guess it first). A walk crosses each leaf at
-    /// most once: one that crosses more leaves than the tree has, or meets
-    /// a leaf outside the tree, stops with a fault.
+    /// t_exit, face, steps)` is the leaf node beyond, as
+    /// [`KdTree::rope_next`] answers (guided ropes guess it first). A walk
+    /// crosses each leaf at most once: one that crosses more leaves than the
+    /// tree has, or meets a leaf outside the tree, stops with a fault.
     #[inline]
     pub(crate) fn rope_walk_by<V: LeafVisitor>(
         &self,
         v: &mut V,
-        first: KdNode,
+        first: u32,
         t1: f32,
         steps: &mut Steps,
-        mut next: impl FnMut(KdNode, f32, usize, &mut Steps) -> Result<Option<KdNode>, ()>,
+        mut next: impl FnMut(u32, f32, usize, &mut Steps) -> Result<Option<u32>, ()>,
     ) -> RopeEnd {
         let r = *v.ray();
-        let mut nd = first;
-        for _ in 0..self.leaves.len() {
+        let mut leaf = first;
+        for _ in 0..self.ropes.len() {
             steps.leaves += 1;
-            let Some(refs) = self.leaf_refs(nd) else {
+            let Some(refs) = self.leaf_refs(self.node(leaf)) else {
                 break;
             };
             steps.empty += refs.is_empty() as u64;
-            let (t_exit, face) = self.leaf_exit(&r, nd);
+            let (t_exit, face) = self.leaf_exit(&r, leaf);
             if v.visit(&self.scene, refs, t_exit.min(t1)) {
                 return RopeEnd::Stopped;
             }
             if t_exit > t1 {
                 return RopeEnd::Exited;
             }
-            match next(nd, t_exit, face, steps) {
-                Ok(Some(n)) => nd = n,
+            match next(leaf, t_exit, face, steps) {
+                Ok(Some(n)) => leaf = n,
                 Ok(None) => return RopeEnd::Exited,
                 Err(()) => return RopeEnd::Fallback,
             }

@@ -1,7 +1,7 @@
 //! Structural checks of a kd-tree, and the figures `coray stats` reports.
 //!
-//! The builder lays a tree out canonically: node pairs, leaf records and
-//! reference ranges are all numbered in depth-first preorder, left first.
+//! The builder lays a tree out canonically: node pairs, reference ranges
+//! and rope records are all numbered in depth-first preorder, left first.
 //! Checking that order proves, with no memory beyond a depth-bounded stack,
 //! that the nodes form one tree (no sharing, no cycle, nothing unreachable).
 //! Ropes are checked in a second pass, over the tree the first one proved:
@@ -45,7 +45,7 @@ fn touches(a: &Aabb, b: &Aabb) -> bool {
 impl<'a> KdTree<'a> {
     /// Checks every structural invariant: one tree in canonical preorder,
     /// splits strictly inside their node's box, depth within the recorded
-    /// depth, leaf records and reference ranges consecutive, every
+    /// depth, reference ranges and rope records consecutive, every
     /// reference naming a non-degenerate primitive that touches its leaf's
     /// box, the references' digest as recorded, leaf boxes equal to the
     /// ones implied by the splits, and every rope leading to a node whose
@@ -74,8 +74,8 @@ impl<'a> KdTree<'a> {
             ..KdTreeStats::default()
         };
         if self.nodes.len() != info.node_count as usize
-            || self.leaves.len() != info.leaf_count as usize
             || self.ropes.len() != info.rope_count() as usize
+            || self.rope_ids.len() != info.rope_id_count() as usize
             || self.refs.len() != info.ref_count as usize
             || info.depth > KD_MAX_DEPTH
         {
@@ -103,27 +103,28 @@ impl<'a> KdTree<'a> {
                 1.0
             };
             if nd.is_leaf() {
-                if nd.index() != next_leaf {
-                    return Err(corrupt("leaf order"));
-                }
-                next_leaf += 1;
-                let l = *self
-                    .leaves
-                    .get(nd.index() as usize)
-                    .ok_or(corrupt("leaf order"))?;
-                if l.first_ref != next_ref {
+                // References lie in leaf preorder, each leaf's after the last's.
+                if nd.first_ref() != next_ref {
                     return Err(corrupt("reference range"));
                 }
                 let refs = self.leaf_refs(nd).ok_or(corrupt("reference range"))?;
-                next_ref += l.ref_count;
+                let count = nd.ref_count();
+                next_ref += count;
                 st.leaves += 1;
-                st.empty_leaves += (l.ref_count == 0) as u32;
-                st.refs += l.ref_count;
+                st.empty_leaves += (count == 0) as u32;
+                st.refs += count;
                 st.depth = st.depth.max(depth);
-                sah += cost_intersection as f64 * l.ref_count as f64 * rel_area;
-                if info.has_ropes() && self.rope(nd.index()).bounds() != b {
-                    return Err(corrupt("leaf box"));
+                sah += cost_intersection as f64 * count as f64 * rel_area;
+                if info.has_ropes() {
+                    // Rope records in leaf preorder, each with its leaf's box.
+                    if self.rope_ids.get(ni as usize) != Some(&next_leaf) {
+                        return Err(corrupt("rope index"));
+                    }
+                    if self.rope(ni).bounds() != b {
+                        return Err(corrupt("leaf box"));
+                    }
                 }
+                next_leaf += 1;
                 for &p in refs {
                     if p as usize >= prims {
                         return Err(corrupt("reference out of range"));
@@ -136,9 +137,12 @@ impl<'a> KdTree<'a> {
                 }
                 continue;
             }
-            let (a, s, left) = (nd.axis(), nd.split(), nd.index());
+            let (a, s, left) = (nd.axis(), nd.split(), nd.left());
             if left != next_pair || left as u64 + 1 >= info.node_count as u64 {
                 return Err(corrupt("node order"));
+            }
+            if info.has_ropes() && self.rope_ids.get(ni as usize) != Some(&NO_NODE) {
+                return Err(corrupt("rope index"));
             }
             next_pair += 2;
             if !(s > b.min[a] && s < b.max[a]) {
@@ -232,7 +236,7 @@ impl<'a> KdTree<'a> {
             if nd.is_leaf() {
                 return Err(corrupt("rope not beside its face"));
             }
-            let (a, s, left) = (nd.axis(), nd.split(), nd.index());
+            let (a, s, left) = (nd.axis(), nd.split(), nd.left());
             // Which side holds the region beyond the face (the whole face,
             // or the rope should have stopped above this split).
             let go_right = if a == axis {

@@ -17,7 +17,7 @@
 use super::history::{HistoryRecord, KIND_LEAF, KIND_UNVISITED};
 use crate::geom::PreparedRay;
 use crate::kd::traverse::{Closest, LeafVisitor, NoRecord, RopeEnd, Steps};
-use crate::kd::{KdNode, KdRopes, KdStackItem, KdTree, NO_NODE};
+use crate::kd::{KdRopes, KdStackItem, KdTree, NO_NODE};
 use crate::{Hit, TraceStats, Vec3};
 
 /// Most boundary rays that guide a ray: all of a patch shaft's
@@ -34,7 +34,7 @@ pub const FROM_START: u32 = u32::MAX - 1;
 /// ended before).
 pub const NO_PATH: u32 = u32::MAX;
 
-/// The leaves (leaf record indices) each boundary ray crossed past the
+/// The leaves (leaf node indices) each boundary ray crossed past the
 /// shaft's common part, in order, in a caller buffer: path `j` in slots
 /// `j * cap ..`, closed by two end markers.
 #[derive(Debug)]
@@ -92,7 +92,7 @@ impl<'b> Paths<'b> {
                         break;
                     }
                     if kind == KIND_LEAF {
-                        out[n] = r.leaf_index();
+                        out[n] = r.node;
                         n += 1;
                     }
                 }
@@ -325,7 +325,7 @@ pub(crate) fn walk_common(
     for (node, run) in leaves {
         steps.leaves += 1;
         let nd = tree.node(node);
-        last = Some(nd);
+        last = Some(node);
         if run {
             steps.empty += 1;
             continue;
@@ -337,7 +337,7 @@ pub(crate) fn walk_common(
         // The leaf's exit matters only once something is hit: test first.
         v.visit(&tree.scene, refs, f32::NEG_INFINITY);
         if v.best.is_hit() {
-            let t_exit = tree.leaf_exit(&v.ray, nd).0.min(t1);
+            let t_exit = tree.leaf_exit(&v.ray, node).0.min(t1);
             if crate::kd::traverse::inside_leaf(v.best.t, t_exit) {
                 return true;
             }
@@ -351,15 +351,15 @@ pub(crate) fn walk_common(
     if t_exit > t1 {
         return true;
     }
-    match next(tree, &r, last.index(), t_exit, face, paths, cur, steps) {
+    match next(tree, &r, last, t_exit, face, paths, cur, steps) {
         Ok(None) => true,
         Ok(Some(n)) => walk(tree, v, n, t1, paths, cur, steps) != RopeEnd::Fallback,
         Err(()) => false,
     }
 }
 
-/// Rope walk from leaf `first` (a leaf record index, not yet visited),
-/// guided by `paths`, until the visitor stops or the segment ends at `t1`.
+/// Rope walk from leaf node `first` (not yet visited), guided by `paths`,
+/// until the visitor stops or the segment ends at `t1`.
 pub(crate) fn walk(
     tree: &KdTree,
     v: &mut Closest,
@@ -370,19 +370,13 @@ pub(crate) fn walk(
     steps: &mut Steps,
 ) -> RopeEnd {
     let r = v.ray;
-    tree.rope_walk_by(
-        v,
-        KdNode::leaf(first),
-        t1,
-        steps,
-        |nd, t_exit, face, steps| {
-            next(tree, &r, nd.index(), t_exit, face, paths, cur, steps).map(|n| n.map(KdNode::leaf))
-        },
-    )
+    tree.rope_walk_by(v, first, t1, steps, |leaf, t_exit, face, steps| {
+        next(tree, &r, leaf, t_exit, face, paths, cur, steps)
+    })
 }
 
-/// The leaf beyond face `face` of leaf `leaf` where the ray goes on after
-/// `t_exit`, guessed from the paths or else found down the rope:
+/// The leaf node beyond face `face` of leaf node `leaf` where the ray goes
+/// on after `t_exit`, guessed from the paths or else found down the rope:
 /// `Ok(None)` at the scene's boundary, `Err(())` when the ray lies in a
 /// split plane there.
 #[allow(clippy::too_many_arguments)]
@@ -403,21 +397,20 @@ pub(crate) fn next(
         return Ok(None);
     }
     // A rope that leads straight to a leaf needs no guess.
-    let target = tree.node(rope);
-    if target.is_leaf() {
-        cur.follow(paths, target.index());
-        return Ok(Some(target.index()));
+    if tree.node(rope).is_leaf() {
+        cur.follow(paths, rope);
+        return Ok(Some(rope));
     }
     let p = rp.onto_face(face, r.at(t_exit));
     if let Some(n) = cur.guess(tree, paths, leaf, p, r.dir, steps) {
         return Ok(Some(n));
     }
     match tree.locate(rope, p, r.dir, steps) {
-        Some(nd) => {
+        Some(leaf) => {
             if cur.next != u32::MAX {
-                cur.resync(paths, nd.index());
+                cur.resync(paths, leaf);
             }
-            Ok(Some(nd.index()))
+            Ok(Some(leaf))
         }
         None => Err(()),
     }

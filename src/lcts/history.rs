@@ -14,15 +14,14 @@ pub const KIND_UNVISITED: u32 = 5;
 
 /// One visited (or pushed) node. Plain data: `word` holds the kind in the
 /// low 3 bits ([`Decision`] as 0 to 3, [`KIND_LEAF`], [`KIND_UNVISITED`])
-/// and above them, for a leaf, its leaf record index, and for an interior
-/// node, once [`fill_lengths`] ran, the number of records of its subtree
-/// (so a subtree can be skipped in O(1)).
+/// and above them, for an interior node, once [`fill_lengths`] ran, the
+/// number of records of its subtree (so a subtree can be skipped in O(1)).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[repr(C)]
 pub struct HistoryRecord {
     /// Node index in the tree.
     pub node: u32,
-    /// Kind in bits 0 to 2; leaf record index or subtree length above.
+    /// Kind in bits 0 to 2; subtree length above.
     pub word: u32,
 }
 
@@ -42,13 +41,6 @@ impl HistoryRecord {
         } else {
             (self.word >> 3) as usize
         }
-    }
-
-    /// A leaf record's leaf record index in the tree (the `KdLeaf` and
-    /// `KdRopes` it names).
-    #[inline]
-    pub fn leaf_index(&self) -> u32 {
-        self.word >> 3
     }
 }
 
@@ -141,8 +133,8 @@ impl Recorder for History<'_> {
         self.push(node, d as u32);
     }
     #[inline]
-    fn leaf(&mut self, node: u32, leaf: u32) {
-        self.push(node, KIND_LEAF | (leaf << 3));
+    fn leaf(&mut self, node: u32) {
+        self.push(node, KIND_LEAF);
     }
     #[inline]
     fn unvisited(&mut self, node: u32) {

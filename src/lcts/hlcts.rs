@@ -233,7 +233,7 @@ impl Builder<'_, '_, '_> {
             self.emit(node, &bx, pos);
             return;
         }
-        let (a, s, left) = (nd.axis(), nd.split(), nd.index());
+        let (a, s, left) = (nd.axis(), nd.split(), nd.left());
         let mut lb = bx;
         lb.max[a] = s;
         let mut rb = bx;
@@ -413,8 +413,7 @@ pub fn trace(
                 steps.empty += 1;
                 if let Some((hist, starts)) = record.as_mut() {
                     starts[e] = hist.len as u32;
-                    let leaf = tree.node(entry.node).index();
-                    crate::kd::traverse::Recorder::leaf(&mut **hist, entry.node, leaf);
+                    crate::kd::traverse::Recorder::leaf(&mut **hist, entry.node);
                 }
                 continue;
             }
@@ -527,7 +526,6 @@ pub fn trace_guided(
                     };
                     let (te, _) = bx.clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max)?;
                     tree.locate(e.node, r.at(te), r.dir, steps)
-                        .map(|nd| nd.index())
                 };
                 guide::walk_from_first(
                     tree, &mut v, t0, t1, paths, &mut cur, &mut steps, from_entry,

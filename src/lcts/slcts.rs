@@ -104,7 +104,7 @@ pub fn entry_node(tree: &KdTree, histories: &[Option<&[HistoryRecord]>]) -> Opti
         }
         let nd = tree.node(r.node);
         let (a, split) = (nd.axis(), nd.split());
-        if next == nd.index() {
+        if next == nd.left() {
             e.hi[a] = split;
         } else {
             e.lo[a] = split;
@@ -134,7 +134,7 @@ pub fn build<'b>(
     if histories.is_empty() || histories.iter().any(|h| h.is_none()) {
         return s;
     }
-    // Walk the leaf records of every history in lockstep.
+    // Walk the leaf entries of every history in lockstep.
     let mut pos = [0usize; 8];
     let k = histories.len().min(pos.len());
     let next_leaf = |h: &[HistoryRecord], p: &mut usize| -> Option<HistoryRecord> {
@@ -159,7 +159,7 @@ pub fn build<'b>(
         if !same {
             break;
         }
-        let empty = tree.leaf_is_empty(rec.leaf_index());
+        let empty = tree.leaf_is_empty(rec.node);
         let unified = empty && last_empty && s.len > 0;
         if !unified && s.len == s.entries.len() {
             break;
@@ -258,7 +258,7 @@ pub fn trace(
                 .iter()
                 .find(|&&e| e & EMPTY_RUN == 0)
                 .is_some_and(|&e| {
-                    let exit = tree.leaf_exit(&v.ray, tree.node(e)).0;
+                    let exit = tree.leaf_exit(&v.ray, e).0;
                     crate::kd::traverse::inside_leaf(h.t, exit)
                 })
         };
@@ -282,7 +282,7 @@ pub fn trace(
                 let e = s.entry?;
                 steps.interior += 1;
                 e.holds(p).then_some(())?;
-                tree.locate(e.node, p, r.dir, steps).map(|nd| nd.index())
+                tree.locate(e.node, p, r.dir, steps)
             };
             guide::walk_from_first(
                 tree, &mut v, t0, t1, paths, &mut cur, &mut steps, from_entry,
