@@ -445,7 +445,9 @@ impl<'a> KdTree<'a> {
             }
             steps.leaves += 1;
             rec.leaf(node);
-            let Some(refs) = self.leaf_refs(nd).filter(|_| budget > 0) else {
+            // The leaf read again (not `nd`): the descent above then loads a
+            // node's second word only where it splits (one load a step less).
+            let Some(refs) = self.leaf_refs(self.node(node)).filter(|_| budget > 0) else {
                 steps.fault();
                 return true;
             };
