@@ -73,29 +73,133 @@ const _: () = {
     assert!(size_of::<coray::proj::Rect>() == 20 && align_of::<coray::proj::Rect>() == 4);
 };
 
+/// A byte range `[start, end)` that one call reads or writes (its end
+/// saturates at the top of memory). An empty range is `(0, 0)`: it meets
+/// no range.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) struct Span {
+    start: u64,
+    end: u64,
+}
+
+impl Span {
+    /// `bytes` at `p` (the empty span when `bytes` is 0).
+    #[inline(always)]
+    pub(crate) fn of<T>(p: *const T, bytes: usize) -> Span {
+        if bytes == 0 {
+            return Span::default();
+        }
+        let start = p as usize as u64;
+        Span {
+            start,
+            end: start.saturating_add(bytes as u64),
+        }
+    }
+
+    /// The four arrays of `s`.
+    #[inline(always)]
+    pub(crate) fn of_scene(s: &coray::Scene) -> [Span; 4] {
+        [
+            Span::of(s.vertices.as_ptr(), size_of_val(s.vertices)),
+            Span::of(s.triangles.as_ptr(), size_of_val(s.triangles)),
+            Span::of(s.spheres.as_ptr(), size_of_val(s.spheres)),
+            Span::of(s.cones.as_ptr(), size_of_val(s.cones)),
+        ]
+    }
+}
+
+/// The spans a call reads, as two arrays (starts, ends; unused entries
+/// empty), so that one written span is tested against all of them on
+/// SIMD lanes.
+#[derive(Clone, Copy)]
+pub(crate) struct ReadSpans<const N: usize> {
+    start: [u64; N],
+    end: [u64; N],
+}
+
+impl<const N: usize> ReadSpans<N> {
+    /// `spans` and, past them, empty entries.
+    #[inline(always)]
+    pub(crate) fn new<const K: usize>(spans: [Span; K]) -> ReadSpans<N> {
+        let mut r = ReadSpans {
+            start: [0; N],
+            end: [0; N],
+        };
+        for (i, s) in spans.iter().enumerate().take(N) {
+            r.start[i] = s.start;
+            r.end[i] = s.end;
+        }
+        r
+    }
+}
+
+/// Whether a `written` span meets a `read` one or another written one
+/// (reads may share memory with each other). Branch-free over the pairs.
+/// When every end lies below 2^63 (always, for real addresses), "a < b"
+/// is the sign bit of `a - b`: a pair is two subtractions and an AND,
+/// ORed over all pairs and tested once, on SIMD lanes where the compiler
+/// can; otherwise every pair is compared.
+#[inline(always)]
+pub(crate) fn overlap<const N: usize>(written: &[Span], read: &ReadSpans<N>) -> bool {
+    let top = written.iter().fold(0, |o, w| o | w.end) | read.end.iter().fold(0, |o, e| o | e);
+    if top >> 63 == 0 {
+        let signs = any_pair(written, read, |w, s, e| {
+            w.start.wrapping_sub(e) & s.wrapping_sub(w.end)
+        });
+        signs >> 63 != 0
+    } else {
+        any_pair(written, read, |w, s, e| {
+            ((w.start < e) & (s < w.end)) as u64
+        }) != 0
+    }
+}
+
+/// OR of `meets(w, start, end)` over every written span `w` and every read
+/// or later written span.
+#[inline(always)]
+fn any_pair<const N: usize>(
+    written: &[Span],
+    read: &ReadSpans<N>,
+    meets: impl Fn(Span, u64, u64) -> u64,
+) -> u64 {
+    let mut o = 0;
+    for (i, w) in written.iter().enumerate() {
+        o |= read
+            .start
+            .iter()
+            .zip(&read.end)
+            .fold(0, |o, (&s, &e)| o | meets(*w, s, e));
+        for x in &written[i + 1..] {
+            o |= meets(*w, x.start, x.end);
+        }
+    }
+    o
+}
+
 /// The byte ranges one call reads and writes: a written range may overlap
 /// no other range of the call (reads may share memory with each other).
-/// Ranges are kept as `[start, end)`; read ones fill the list from the
-/// front, written ones from the back, so [`Regions::check`] compares only
-/// the pairs that matter (a one-ray call has three written of about ten).
 #[derive(Clone, Copy)]
 pub(crate) struct Regions {
-    list: [(usize, usize); REGIONS],
-    read: usize,
-    written: usize,
-    /// More ranges were added than the list holds: `check` refuses.
+    read: ReadSpans<READS>,
+    written: [Span; WRITES],
+    reads: usize,
+    writes: usize,
+    /// More ranges were added than the lists hold: `check` refuses.
     overflow: bool,
 }
 
-/// Ranges one call may note (the busiest entry points note 11).
-const REGIONS: usize = 16;
+/// Ranges one call may read and write (the busiest entry points read 9
+/// and write 4).
+const READS: usize = 12;
+const WRITES: usize = 6;
 
 impl Regions {
     pub(crate) fn new() -> Regions {
         Regions {
-            list: [(0, 0); REGIONS],
-            read: 0,
-            written: 0,
+            read: ReadSpans::new::<0>([]),
+            written: [Span::default(); WRITES],
+            reads: 0,
+            writes: 0,
             overflow: false,
         }
     }
@@ -106,40 +210,42 @@ impl Regions {
         if bytes == 0 {
             return self;
         }
-        if self.read + self.written == REGIONS {
-            self.overflow = true;
-            return self;
-        }
-        let range = (p as usize, (p as usize).saturating_add(bytes));
+        let span = Span::of(p, bytes);
         if written {
-            self.written += 1;
-            self.list[REGIONS - self.written] = range;
+            match self.written.get_mut(self.writes) {
+                Some(w) => *w = span,
+                None => self.overflow = true,
+            }
+            self.writes += 1;
         } else {
-            self.list[self.read] = range;
-            self.read += 1;
+            match (
+                self.read.start.get_mut(self.reads),
+                self.read.end.get_mut(self.reads),
+            ) {
+                (Some(s), Some(e)) => (*s, *e) = (span.start, span.end),
+                _ => self.overflow = true,
+            }
+            self.reads += 1;
         }
         self
     }
 
-    /// `InvalidParameter` when a written range overlaps another. Every
-    /// trace call runs this: branch-free over the pairs.
+    /// Adds the four arrays of `s` as read.
+    #[inline(always)]
+    pub(crate) fn add_scene(&mut self, s: &coray::Scene) -> &mut Regions {
+        self.add(s.vertices.as_ptr(), size_of_val(s.vertices), false)
+            .add(s.triangles.as_ptr(), size_of_val(s.triangles), false)
+            .add(s.spheres.as_ptr(), size_of_val(s.spheres), false)
+            .add(s.cones.as_ptr(), size_of_val(s.cones), false)
+    }
+
+    /// `InvalidParameter` when a written range overlaps another.
     #[inline(always)]
     pub(crate) fn check(&self) -> Result<(), CorayStatus> {
         if self.overflow {
             return Err(CorayStatus::InternalError);
         }
-        let overlaps = |(start, end): (usize, usize), others: &[(usize, usize)]| {
-            others
-                .iter()
-                .fold(false, |o, &(s, e)| o | ((start < e) & (s < end)))
-        };
-        let mut overlap = false;
-        for i in REGIONS - self.written..REGIONS {
-            // Every read range, and the written ones after this one.
-            overlap |= overlaps(self.list[i], &self.list[..self.read]);
-            overlap |= overlaps(self.list[i], &self.list[i + 1..]);
-        }
-        if overlap {
+        if overlap(&self.written[..self.writes], &self.read) {
             return Err(CorayStatus::InvalidParameter);
         }
         Ok(())
@@ -307,6 +413,19 @@ impl<T: Versioned> Out<T> {
         optional: bool,
         regions: &mut Regions,
     ) -> Result<Out<T>, CorayStatus> {
+        // SAFETY: forwarded contract.
+        let out = unsafe { Out::open(p, optional)? };
+        regions.add(p, out.bytes, true);
+        Ok(out)
+    }
+
+    /// [`Out::new`] without a region list: the caller checks
+    /// [`Out::span`] for overlaps itself.
+    ///
+    /// # Safety
+    /// As [`Out::new`].
+    #[inline(always)]
+    pub(crate) unsafe fn open(p: *mut T, optional: bool) -> Result<Out<T>, CorayStatus> {
         if p.is_null() {
             return if optional {
                 Ok(Out { p, bytes: 0 })
@@ -322,9 +441,16 @@ impl<T: Versioned> Out<T> {
         if declared < T::SIZE_1_0 || declared > isize::MAX as usize {
             return Err(CorayStatus::InvalidParameter);
         }
-        let bytes = declared.min(size_of::<T>());
-        regions.add(p, bytes, true);
-        Ok(Out { p, bytes })
+        Ok(Out {
+            p,
+            bytes: declared.min(size_of::<T>()),
+        })
+    }
+
+    /// The bytes `write` will write (empty for NULL).
+    #[inline(always)]
+    pub(crate) fn span(&self) -> Span {
+        Span::of(self.p, self.bytes)
     }
 
     /// Writes `v` (the caller's `struct_size` bytes of it; `struct_size`
@@ -401,15 +527,7 @@ pub(crate) unsafe fn scene<'a>(
             cones: input(s.cones.cast::<coray::Cone>(), s.cone_count)?,
         }
     };
-    regions
-        .add(scene.vertices.as_ptr(), size_of_val(scene.vertices), false)
-        .add(
-            scene.triangles.as_ptr(),
-            size_of_val(scene.triangles),
-            false,
-        )
-        .add(scene.spheres.as_ptr(), size_of_val(scene.spheres), false)
-        .add(scene.cones.as_ptr(), size_of_val(scene.cones), false);
+    regions.add_scene(&scene);
     Ok(scene)
 }
 
@@ -425,6 +543,23 @@ pub(crate) unsafe fn stack<'a, T: Plain>(
     need: usize,
     regions: &mut Regions,
 ) -> Result<&'a mut [T], CorayStatus> {
+    // SAFETY: forwarded contract.
+    let s: &mut [T] = unsafe { stack_unnoted(p, bytes, need)? };
+    regions.add(s.as_ptr(), size_of_val(s), true);
+    Ok(s)
+}
+
+/// [`stack`] without a region list: the caller checks its span for
+/// overlaps itself.
+///
+/// # Safety
+/// As [`stack`].
+#[inline(always)]
+pub(crate) unsafe fn stack_unnoted<'a, T: Plain>(
+    p: *mut core::ffi::c_void,
+    bytes: usize,
+    need: usize,
+) -> Result<&'a mut [T], CorayStatus> {
     if need == 0 {
         return Ok(&mut []);
     }
@@ -436,7 +571,6 @@ pub(crate) unsafe fn stack<'a, T: Plain>(
     if bytes < need_bytes {
         return Err(CorayStatus::ArenaTooSmall);
     }
-    regions.add(base, need_bytes, true);
     // SAFETY: aligned (checked), `need_bytes <= bytes` writable bytes lent
     // exclusively by the caller.
     Ok(unsafe { arena_mut(base, 0, need) })
@@ -474,14 +608,51 @@ mod tests {
     }
 
     #[test]
-    fn more_regions_than_the_list_holds_are_refused() {
+    fn more_regions_than_the_lists_hold_are_refused() {
         let buf = [0u8; 64];
         let mut r = Regions::new();
-        for i in 0..REGIONS {
+        for i in 0..READS {
             r.add(buf.as_ptr().wrapping_add(i), 1, false);
         }
+        for i in 0..WRITES {
+            r.add(buf.as_ptr().wrapping_add(32 + i), 1, true);
+        }
         assert!(r.check().is_ok());
-        r.add(buf.as_ptr(), 1, true);
-        assert_eq!(r.check(), Err(CorayStatus::InternalError));
+        let (mut reads, mut writes) = (r, r);
+        reads.add(buf.as_ptr(), 1, false);
+        assert_eq!(reads.check(), Err(CorayStatus::InternalError));
+        writes.add(buf.as_ptr().wrapping_add(48), 1, true);
+        assert_eq!(writes.check(), Err(CorayStatus::InternalError));
+    }
+
+    #[test]
+    fn both_overlap_tests_agree_on_every_pair() {
+        // Spans over 0..8 (and at the top of memory, where only the exact
+        // test runs): the sign-bit test and the comparisons agree.
+        let spans = |base: u64| {
+            let mut v = std::vec![Span::default()];
+            for a in 0..8 {
+                for b in a + 1..=8 {
+                    v.push(Span {
+                        start: base + a,
+                        end: base + b,
+                    });
+                }
+            }
+            v
+        };
+        for base in [16u64, u64::MAX - 8] {
+            for &w in &spans(base) {
+                for &r in &spans(base) {
+                    let want = w != Span::default()
+                        && r != Span::default()
+                        && w.start < r.end
+                        && r.start < w.end;
+                    let read = ReadSpans::<3>::new([r]);
+                    assert_eq!(overlap(&[w], &read), want, "{w:?} {r:?}");
+                    assert_eq!(overlap(&[w, r], &ReadSpans::<2>::new([])), want);
+                }
+            }
+        }
     }
 }

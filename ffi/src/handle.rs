@@ -6,7 +6,7 @@
 //! (uninitialised, zeroed, overwritten) is refused with
 //! `CORAY_STATUS_INVALID_PARAMETER`, never followed.
 
-use crate::carve::{self, Regions};
+use crate::carve::{self, Regions, Span};
 use crate::CorayStatus;
 use coray::Scene;
 
@@ -68,15 +68,14 @@ const WORDS: usize = 32;
 const SEALED_END: usize = 21;
 
 /// The seal over the covered words: four independent lanes (so a trace
-/// call's check is not one long dependency chain) of xor, odd multiply and
-/// rotate per word, joined by one avalanche. Each step is a bijection of
-/// its lane and the lanes are joined by xor of distinct rotations, so any
-/// single changed word changes the seal: it catches a handle the caller
-/// damaged or never opened. Every trace call checks it (about 3
-/// instructions a word).
+/// call's check is not one long dependency chain) of xor and rotate per
+/// word, joined by one avalanche. Each step is a bijection of its lane and
+/// the lanes are joined by xor of distinct rotations, so any single
+/// changed word changes the seal: it catches a handle the caller damaged
+/// or never opened. Every trace call checks it (about 2 instructions a
+/// word, none of them a multiply).
 #[inline(always)]
 fn seal_of(w: &[u64; WORDS]) -> u64 {
-    const K: u64 = 0x9E37_79B9_7F4A_7C15;
     let mut l = [
         0xC0A4_5EA1_0000_0001u64,
         0x6A09_E667_F3BC_C908,
@@ -85,7 +84,7 @@ fn seal_of(w: &[u64; WORDS]) -> u64 {
     ];
     for group in w[1..SEALED_END].chunks_exact(4) {
         for (lane, &x) in l.iter_mut().zip(group) {
-            *lane = (*lane ^ x).wrapping_mul(K).rotate_left(29);
+            *lane = (*lane ^ x).rotate_left(23);
         }
     }
     coray::rng::mix64(l[0] ^ l[1].rotate_left(16) ^ l[2].rotate_left(32) ^ l[3].rotate_left(48))
@@ -183,6 +182,16 @@ impl<'h> Sealed<'h> {
         self.w[3] as usize
     }
 
+    /// What a call on this handle reads besides its own arguments: the
+    /// handle's words, and the arena.
+    #[inline(always)]
+    pub(crate) fn spans(&self) -> [Span; 2] {
+        [
+            Span::of(self.w.as_ptr(), core::mem::size_of::<[u64; WORDS]>()),
+            Span::of(self.arena() as *const u8, self.arena_bytes()),
+        ]
+    }
+
     /// Byte offset and count of the arena's part `i`.
     #[inline]
     fn part_at(&self, i: usize) -> (usize, usize) {
@@ -190,35 +199,25 @@ impl<'h> Sealed<'h> {
         ((x >> 32) as usize, x as u32 as usize)
     }
 
-    /// The scene the handle was opened with, its arrays noted in `regions`.
+    /// The scene the handle was opened with.
     ///
     /// # Safety
     /// The arrays the open call was given are still readable and unchanged
     /// (the caller's contract for every call on a handle).
     #[inline(always)]
-    pub(crate) unsafe fn scene<'a>(&self, regions: &mut Regions) -> Scene<'a> {
+    pub(crate) unsafe fn scene<'a>(&self) -> Scene<'a> {
         let s = |i: usize| (self.w[4 + i] as usize, self.w[5 + i] as usize);
         // SAFETY (four calls): address and count were checked by
         // carve::input when the handle was opened (non-null unless empty,
         // aligned, size in range) and sealed since; readable by the contract.
-        let scene = unsafe {
+        unsafe {
             Scene {
                 vertices: slice(s(0)),
                 triangles: slice(s(2)),
                 spheres: slice(s(4)),
                 cones: slice(s(6)),
             }
-        };
-        regions
-            .add(scene.vertices.as_ptr(), size_of_val(scene.vertices), false)
-            .add(
-                scene.triangles.as_ptr(),
-                size_of_val(scene.triangles),
-                false,
-            )
-            .add(scene.spheres.as_ptr(), size_of_val(scene.spheres), false)
-            .add(scene.cones.as_ptr(), size_of_val(scene.cones), false);
-        scene
+        }
     }
 
     /// Part `i` of the arena as a slice of `T`. Not checked again: the
@@ -263,8 +262,23 @@ pub(crate) unsafe fn read<'h>(
     kind: u64,
     regions: &mut Regions,
 ) -> Result<Sealed<'h>, CorayStatus> {
-    carve::check_array(p, 1)?;
+    // SAFETY: forwarded contract.
+    let h = unsafe { read_unnoted(p, kind)? };
     regions.add(p, core::mem::size_of::<[u64; WORDS]>(), false);
+    Ok(h)
+}
+
+/// [`read`] without a region list: the caller checks overlaps with
+/// [`Sealed::spans`] itself.
+///
+/// # Safety
+/// As [`read`].
+#[inline(always)]
+pub(crate) unsafe fn read_unnoted<'h>(
+    p: *const [u64; WORDS],
+    kind: u64,
+) -> Result<Sealed<'h>, CorayStatus> {
+    carve::check_array(p, 1)?;
     // SAFETY: non-null and aligned (checked); readable and unchanged for
     // 'h by the contract.
     Sealed::new(unsafe { &*p }, kind)

@@ -603,7 +603,8 @@ unsafe fn open<'a>(
     unsafe {
         let h = handle::read(t.cast(), KIND_PROJ, regions)?;
         regions.add(h.arena() as *const u8, h.arena_bytes(), false);
-        let scene = h.scene(regions);
+        let scene = h.scene();
+        regions.add_scene(&scene);
         view_of(h, scene)
     }
 }

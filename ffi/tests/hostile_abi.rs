@@ -433,3 +433,306 @@ fn built_arenas_are_a_function_of_scene_and_parameters() {
         );
     }
 }
+
+/// The one-ray calls check their buffers on their own path (spans known
+/// at compile time, not the array calls' region list): every placement of
+/// ray, hit, stack and statistics gets the status the array call gives for
+/// one ray, and a refused call writes nothing.
+#[test]
+fn the_one_ray_calls_refuse_what_the_array_calls_refuse() {
+    // One block of memory holds the scene's vertices, the ray, the output,
+    // the statistics and the stack, so that each can be put over another.
+    const STACK: usize = 1024;
+    const RAY: usize = 8192;
+    const HIT: usize = 8448;
+    const STATS: usize = 8704;
+    let mut mem = arena(16384);
+    let base = mem.as_mut_ptr().cast::<u8>();
+    let f = floor();
+    // SAFETY (whole test): every offset below lies inside `mem`, aligned
+    // for its type; the calls get raw pointers only.
+    unsafe {
+        core::ptr::copy_nonoverlapping(f.vertices.as_ptr(), base.cast::<f32>(), 12);
+        let mut s = scene(&f);
+        s.vertices = base.cast::<f32>();
+        let (tree_arena, t) = kd(&s);
+        let at = |off: usize| base.add(off);
+        let stats_at = |off: usize| {
+            let p = at(off).cast::<CorayTraceStats>();
+            p.write(CorayTraceStats {
+                struct_size: size_of::<CorayTraceStats>(),
+                ..Default::default()
+            });
+            p
+        };
+        at(RAY).cast::<CorayRay>().write(down());
+        let arena_hit = tree_arena.as_ptr().cast::<u8>().add(64) as *mut CorayHit;
+        let mut handle_copy = t;
+        let zeroed = CorayKdTree { opaque: [0; 32] };
+        // (what, handle, traversal, ray, out, stack, stats, the status).
+        type Case = (
+            &'static str,
+            *const CorayKdTree,
+            CorayTraversal,
+            usize,
+            *mut u8,
+            *mut u8,
+            *mut CorayTraceStats,
+            CorayStatus,
+        );
+        let ok = CorayStatus::Ok;
+        let bad = CorayStatus::InvalidParameter;
+        let none = core::ptr::null_mut::<CorayTraceStats>();
+        let cases: Vec<Case> = vec![
+            (
+                "clean, no statistics",
+                &t,
+                0,
+                RAY,
+                at(HIT),
+                at(STACK),
+                none,
+                ok,
+            ),
+            (
+                "clean, statistics",
+                &t,
+                1,
+                RAY,
+                at(HIT),
+                at(STACK),
+                stats_at(STATS),
+                ok,
+            ),
+            (
+                "out over the ray",
+                &t,
+                0,
+                RAY,
+                at(RAY),
+                at(STACK),
+                none,
+                bad,
+            ),
+            (
+                "out inside the stack",
+                &t,
+                0,
+                RAY,
+                at(STACK + 64),
+                at(STACK),
+                none,
+                bad,
+            ),
+            (
+                "out inside the arena",
+                &t,
+                0,
+                RAY,
+                arena_hit.cast(),
+                at(STACK),
+                none,
+                bad,
+            ),
+            (
+                "out inside the handle",
+                &handle_copy,
+                0,
+                RAY,
+                (&mut handle_copy as *mut CorayKdTree).cast(),
+                at(STACK),
+                none,
+                bad,
+            ),
+            (
+                "stack over the ray",
+                &t,
+                0,
+                RAY,
+                at(HIT),
+                at(RAY - 256),
+                none,
+                bad,
+            ),
+            (
+                "stack over the vertices",
+                &t,
+                0,
+                RAY,
+                at(HIT),
+                at(0),
+                none,
+                bad,
+            ),
+            (
+                "statistics over the out",
+                &t,
+                0,
+                RAY,
+                at(HIT),
+                at(STACK),
+                stats_at(HIT),
+                bad,
+            ),
+            (
+                "statistics inside the stack",
+                &t,
+                0,
+                RAY,
+                at(HIT),
+                at(STACK),
+                stats_at(STACK + 512),
+                bad,
+            ),
+            (
+                "statistics over the ray",
+                &t,
+                0,
+                RAY,
+                at(HIT),
+                at(STACK),
+                at(RAY).cast(),
+                bad,
+            ),
+            (
+                "misaligned statistics",
+                &t,
+                0,
+                RAY,
+                at(HIT),
+                at(STACK),
+                at(STATS + 1).cast(),
+                CorayStatus::Misaligned,
+            ),
+            (
+                "misaligned stack",
+                &t,
+                0,
+                RAY,
+                at(HIT),
+                at(STACK + 4),
+                none,
+                CorayStatus::Misaligned,
+            ),
+            (
+                "no stack",
+                &t,
+                0,
+                RAY,
+                at(HIT),
+                core::ptr::null_mut(),
+                none,
+                CorayStatus::NullPointer,
+            ),
+            (
+                "a handle never opened",
+                &zeroed,
+                0,
+                RAY,
+                at(HIT),
+                at(STACK),
+                none,
+                bad,
+            ),
+            (
+                "an unknown traversal",
+                &t,
+                9,
+                RAY,
+                at(HIT),
+                at(STACK),
+                none,
+                bad,
+            ),
+        ];
+        for (what, h, m, ray, out, stack, stats, want) in cases {
+            let ray = at(ray).cast::<CorayRay>();
+            at(RAY).cast::<CorayRay>().write(down());
+            // The same call four ways: intersect and occluded, one ray and
+            // an array of one.
+            let fill = 0xA5u8;
+            let calls: [(&str, usize, &dyn Fn() -> CorayStatus); 4] = [
+                ("intersect1", size_of::<CorayHit>(), &|| {
+                    coray_kdtree_intersect1(
+                        h,
+                        m,
+                        ray,
+                        out.cast(),
+                        stack.cast(),
+                        CORAY_KDTREE_STACK_BYTES,
+                        stats,
+                    )
+                }),
+                ("intersect", size_of::<CorayHit>(), &|| {
+                    coray_kdtree_intersect(
+                        h,
+                        m,
+                        ray,
+                        out.cast(),
+                        1,
+                        stack.cast(),
+                        CORAY_KDTREE_STACK_BYTES,
+                        stats,
+                    )
+                }),
+                ("occluded1", 1, &|| {
+                    coray_kdtree_occluded1(
+                        h,
+                        m,
+                        ray,
+                        out,
+                        stack.cast(),
+                        CORAY_KDTREE_STACK_BYTES,
+                        stats,
+                    )
+                }),
+                ("occluded", 1, &|| {
+                    coray_kdtree_occluded(
+                        h,
+                        m,
+                        ray,
+                        out,
+                        1,
+                        stack.cast(),
+                        CORAY_KDTREE_STACK_BYTES,
+                        stats,
+                    )
+                }),
+            ];
+            let mut answers = Vec::new();
+            for (name, bytes, call) in calls {
+                // Outputs that lie in the caller's free memory are filled
+                // first: a refused call must leave them so.
+                let free = out >= at(HIT) && out < at(STATS);
+                if free {
+                    core::ptr::write_bytes(out, fill, bytes);
+                }
+                let arena_before = tree_arena.iter().map(|b| b.0).collect::<Vec<_>>();
+                assert_eq!(call(), want, "{what}: {name}");
+                if want != ok {
+                    if free {
+                        let o = core::slice::from_raw_parts(out, bytes);
+                        assert!(o.iter().all(|&b| b == fill), "{what}: {name} wrote");
+                    }
+                    assert!(
+                        tree_arena.iter().map(|b| b.0).eq(arena_before),
+                        "{what}: {name} wrote into the arena"
+                    );
+                } else {
+                    answers.push(core::slice::from_raw_parts(out, bytes).to_vec());
+                }
+            }
+            if want == ok {
+                assert_eq!(
+                    answers[0], answers[1],
+                    "{what}: one-ray and array hits differ"
+                );
+                assert_eq!(
+                    answers[2], answers[3],
+                    "{what}: one-ray and array answers differ"
+                );
+                assert_eq!(answers[2], [1], "{what}: the floor blocks the ray");
+            }
+        }
+    }
+}
