@@ -345,6 +345,7 @@ impl Made {
         KdTree {
             scene: *scene,
             info,
+            trace_box: info.trace_bounds(),
             nodes,
             ropes,
             rope_ids,

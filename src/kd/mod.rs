@@ -28,6 +28,7 @@ pub use packet::LANES as PACKET_LANES;
 pub use traverse::{Decision, Traversal};
 pub use validate::KdTreeStats;
 
+use crate::geom::Aabb;
 use crate::{Error, Scene};
 
 /// How a build decides where to stop, and what its SAH costs are.
@@ -239,6 +240,9 @@ pub struct KdScratch<'s> {
 pub struct KdTree<'a> {
     pub(crate) scene: Scene<'a>,
     pub(crate) info: KdInfo,
+    /// `info.trace_bounds()`, computed once: the box every ray is clipped
+    /// to before it walks.
+    pub(crate) trace_box: Aabb,
     /// `info.node_count` nodes; node 0 is the root.
     pub(crate) nodes: &'a [KdNode],
     /// `info.rope_count()` rope records: one per leaf, or none.
@@ -282,6 +286,7 @@ impl<'a> KdTree<'a> {
         let tree = KdTree {
             scene,
             info,
+            trace_box: info.trace_bounds(),
             nodes: &nodes[..info.node_count as usize],
             ropes: &ropes[..info.rope_count() as usize],
             rope_ids: &rope_ids[..info.rope_id_count() as usize],

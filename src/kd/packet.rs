@@ -719,7 +719,7 @@ impl KdTree<'_> {
     ) {
         // Each lane's segment inside the scene's box: scene_segment's
         // arithmetic (Aabb::clip_ray; every lane's 1/dir is finite).
-        let b = self.info.trace_bounds();
+        let b = self.trace_box;
         let (mut tn, mut tf) = (p.t_min, p.t_max);
         for a in 0..3 {
             let lo = (F8::splat(b.min[a]) - p.o[a]) * p.inv[a];
