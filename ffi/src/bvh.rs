@@ -6,6 +6,7 @@
 use crate::abi::*;
 use crate::carve::{self, check_arena, Out, OutValue, Regions, Versioned};
 use crate::handle::{self, Handle, Sealed, KIND_BVH};
+use crate::one_ray::one_ray;
 use crate::{guard, CorayBvh, CorayStatus};
 use coray::bvh::layout::{
     code, BvhArenaHeader, BvhArenaLayout, BvhScratchLayout, BVH_HEADER_BYTES, BVH_MAGIC,
@@ -817,8 +818,23 @@ pub unsafe extern "C" fn coray_bvh_intersect1(
     if ray.is_null() || hit.is_null() {
         return CorayStatus::NullPointer;
     }
-    // SAFETY: forwarded caller contract.
-    unsafe { coray_bvh_intersect(bvh, ray, hit, 1, stack, stack_bytes, stats) }
+    guard(|| {
+        // SAFETY: forwarded caller contract.
+        unsafe {
+            one_ray(
+                bvh.cast(),
+                KIND_BVH,
+                |h| Ok(view_of(h, h.scene())?.1),
+                |b| b.stack_len(),
+                ray,
+                hit,
+                stack,
+                stack_bytes,
+                stats,
+                |b, r, s: &mut [BvhStackItem], st| Ok(b.intersect(r, s, st).into()),
+            )
+        }
+    })
 }
 
 /// Any-hit queries (shadow rays): `occluded[i]` is 1 when something lies
@@ -866,6 +882,21 @@ pub unsafe extern "C" fn coray_bvh_occluded1(
     if ray.is_null() || occluded.is_null() {
         return CorayStatus::NullPointer;
     }
-    // SAFETY: forwarded caller contract.
-    unsafe { coray_bvh_occluded(bvh, ray, occluded, 1, stack, stack_bytes, stats) }
+    guard(|| {
+        // SAFETY: forwarded caller contract.
+        unsafe {
+            one_ray(
+                bvh.cast(),
+                KIND_BVH,
+                |h| Ok(view_of(h, h.scene())?.1),
+                |b| b.stack_len(),
+                ray,
+                occluded,
+                stack,
+                stack_bytes,
+                stats,
+                |b, r, s: &mut [BvhStackItem], st| Ok(b.occluded(r, s, st) as u8),
+            )
+        }
+    })
 }

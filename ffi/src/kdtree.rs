@@ -5,6 +5,7 @@
 use crate::abi::*;
 use crate::carve::{self, check_arena, Out, OutValue, Regions, Versioned};
 use crate::handle::{self, Handle, Sealed, KIND_KD};
+use crate::one_ray::one_ray;
 use crate::{guard, CorayKdRunJobs, CorayKdTree, CorayStatus};
 use coray::kd::layout::{KdArenaHeader, KdArenaLayout, KdScratchLayout, KD_HEADER_BYTES};
 use coray::kd::{
@@ -640,74 +641,6 @@ unsafe fn batch<O>(
     })
 }
 
-/// The body of the one-ray entry points: `batch`'s checks, statuses and
-/// their order for a count of 1, on spans it knows at compile time (no
-/// region list to fill, no chunk loop, no statistics to merge), so that a
-/// renderer tracing one ray per call pays little more per ray than an
-/// array call does. `answer` traces the ray; its result goes to `out`.
-///
-/// Safety: as `coray_kdtree_intersect1`, with `out` one writable `O`.
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-unsafe fn one_ray<O>(
-    tree: *const CorayKdTree,
-    method: CorayTraversal,
-    ray: *const CorayRay,
-    out: *mut O,
-    stack: *mut c_void,
-    stack_bytes: usize,
-    stats: *mut CorayTraceStats,
-    answer: impl FnOnce(&KdTree, &coray::Ray, Traversal, &mut [KdStackItem], &mut TraceStats) -> O,
-) -> CorayStatus {
-    guard(|| {
-        let method = traversal(method)?;
-        // SAFETY: forwarded caller contract for every pointer; each is
-        // checked (null, alignment, size) before it is read or viewed, and
-        // nothing is written before the overlap check below.
-        let (h, t, r, stk, stats) = unsafe {
-            let h = handle::read_unnoted(tree.cast(), KIND_KD)?;
-            let t = tree_of(h, h.scene())?;
-            carve::check_array(ray, 1)?;
-            carve::check_array(out, 1)?;
-            let stk = carve::stack_unnoted::<KdStackItem>(stack, stack_bytes, KD_STACK_LEN)?;
-            let stats = Out::open(stats, true)?;
-            (h, t, ray.read(), stk, stats)
-        };
-        let [handle_words, arena] = h.spans();
-        let [vertices, triangles, spheres, cones] = carve::Span::of_scene(t.scene());
-        let read = carve::ReadSpans::<8>::new([
-            handle_words,
-            arena,
-            vertices,
-            triangles,
-            spheres,
-            cones,
-            carve::Span::of(ray, size_of::<CorayRay>()),
-        ]);
-        let stk_span = carve::Span::of(stk.as_ptr(), size_of_val(stk));
-        let out_span = carve::Span::of(out, size_of::<O>());
-        // Most one-ray callers pass no statistics: a third of the pairs less.
-        let overlap = if stats.span() == carve::Span::default() {
-            carve::overlap(&[stk_span, out_span], &read)
-        } else {
-            carve::overlap(&[stk_span, out_span, stats.span()], &read)
-        };
-        if overlap {
-            return Err(CorayStatus::InvalidParameter);
-        }
-        let mut st = TraceStats::default();
-        let o = answer(&t, &coray::Ray::from(&r), method, stk, &mut st);
-        if st.faults > 0 {
-            return Err(CorayStatus::CorruptArena);
-        }
-        // SAFETY: checked non-null and aligned above, and disjoint from
-        // every buffer this call reads or writes.
-        unsafe { out.write(o) };
-        stats.write(CorayTraceStats::of(&st));
-        Ok(())
-    })
-}
-
 /// Closest hits of up to [`PACKET_LANES`] rays, written in place (the
 /// caller's array is the core's).
 fn intersect_chunk(
@@ -797,19 +730,26 @@ pub unsafe extern "C" fn coray_kdtree_intersect1(
     stack_bytes: usize,
     stats: *mut CorayTraceStats,
 ) -> CorayStatus {
-    // SAFETY: forwarded caller contract.
-    unsafe {
-        one_ray(
-            tree,
-            traversal,
-            ray,
-            hit,
-            stack,
-            stack_bytes,
-            stats,
-            |t, r, m, s, st| CorayHit::from(KdTree::intersect(t, r, m, s, st)),
-        )
-    }
+    guard(|| {
+        let method = self::traversal(traversal)?;
+        // SAFETY: forwarded caller contract.
+        unsafe {
+            one_ray(
+                tree.cast(),
+                KIND_KD,
+                |h| tree_of(h, h.scene()),
+                |_| KD_STACK_LEN,
+                ray,
+                hit,
+                stack,
+                stack_bytes,
+                stats,
+                |t, r, s: &mut [KdStackItem], st| {
+                    Ok(CorayHit::from(KdTree::intersect(t, r, method, s, st)))
+                },
+            )
+        }
+    })
 }
 
 /// Any-hit queries (shadow rays) of `count` rays: `occluded[i]` is 1 when
@@ -857,17 +797,22 @@ pub unsafe extern "C" fn coray_kdtree_occluded1(
     stack_bytes: usize,
     stats: *mut CorayTraceStats,
 ) -> CorayStatus {
-    // SAFETY: forwarded caller contract.
-    unsafe {
-        one_ray(
-            tree,
-            traversal,
-            ray,
-            occluded,
-            stack,
-            stack_bytes,
-            stats,
-            |t, r, m, s, st| KdTree::occluded(t, r, m, s, st) as u8,
-        )
-    }
+    guard(|| {
+        let method = self::traversal(traversal)?;
+        // SAFETY: forwarded caller contract.
+        unsafe {
+            one_ray(
+                tree.cast(),
+                KIND_KD,
+                |h| tree_of(h, h.scene()),
+                |_| KD_STACK_LEN,
+                ray,
+                occluded,
+                stack,
+                stack_bytes,
+                stats,
+                |t, r, s: &mut [KdStackItem], st| Ok(KdTree::occluded(t, r, method, s, st) as u8),
+            )
+        }
+    })
 }

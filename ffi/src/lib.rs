@@ -27,6 +27,7 @@ mod carve;
 mod cast;
 mod handle;
 mod kdtree;
+mod one_ray;
 mod proj;
 #[cfg(feature = "std")]
 pub mod saved;

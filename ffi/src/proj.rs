@@ -8,6 +8,7 @@ use crate::bvh::{check_scene, scene_counts, CorayBvhBuilder, CorayBvhParams, Kin
 use crate::carve::{self, check_arena, Out, OutValue, Regions, Versioned};
 use crate::cast::{camera, CorayCamera};
 use crate::handle::{self, Handle, Sealed, KIND_PROJ};
+use crate::one_ray::one_ray;
 use crate::{guard, CorayProj, CorayStatus};
 use coray::bvh::layout::code;
 use coray::bvh::{Bvh, BvhNode, BvhScratch, BvhStackItem};
@@ -792,8 +793,34 @@ pub unsafe extern "C" fn coray_proj_intersect1(
     if ray.is_null() || hit.is_null() {
         return CorayStatus::NullPointer;
     }
-    // SAFETY: forwarded caller contract.
-    unsafe { coray_proj_intersect(proj, scheme, ray, hit, 1, stack, stack_bytes, stats) }
+    guard(|| {
+        let sc = self::scheme(scheme)?;
+        // SAFETY: forwarded caller contract.
+        unsafe {
+            one_ray(
+                proj.cast(),
+                KIND_PROJ,
+                |h| Ok(view_of(h, h.scene())?.1),
+                |p| p.stack_len(),
+                ray,
+                hit,
+                stack,
+                stack_bytes,
+                stats,
+                |p, r, s: &mut [BvhStackItem], st| {
+                    // The ray must lie on a line through the plane's eye
+                    // (checked after the buffers, as the array call does);
+                    // then a refusal would be a defect.
+                    if p.project(r).is_none() {
+                        return Err(CorayStatus::InvalidParameter);
+                    }
+                    p.intersect(r, sc, s, st)
+                        .map(Into::into)
+                        .ok_or(CorayStatus::InternalError)
+                },
+            )
+        }
+    })
 }
 
 /// Any-hit queries (shadow rays towards the plane's light), as
@@ -844,6 +871,32 @@ pub unsafe extern "C" fn coray_proj_occluded1(
     if ray.is_null() || occluded.is_null() {
         return CorayStatus::NullPointer;
     }
-    // SAFETY: forwarded caller contract.
-    unsafe { coray_proj_occluded(proj, scheme, ray, occluded, 1, stack, stack_bytes, stats) }
+    guard(|| {
+        let sc = self::scheme(scheme)?;
+        // SAFETY: forwarded caller contract.
+        unsafe {
+            one_ray(
+                proj.cast(),
+                KIND_PROJ,
+                |h| Ok(view_of(h, h.scene())?.1),
+                |p| p.stack_len(),
+                ray,
+                occluded,
+                stack,
+                stack_bytes,
+                stats,
+                |p, r, s: &mut [BvhStackItem], st| {
+                    // The ray must lie on a line through the plane's eye
+                    // (checked after the buffers, as the array call does);
+                    // then a refusal would be a defect.
+                    if p.project(r).is_none() {
+                        return Err(CorayStatus::InvalidParameter);
+                    }
+                    p.occluded(r, sc, s, st)
+                        .map(u8::from)
+                        .ok_or(CorayStatus::InternalError)
+                },
+            )
+        }
+    })
 }

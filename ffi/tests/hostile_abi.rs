@@ -434,12 +434,28 @@ fn built_arenas_are_a_function_of_scene_and_parameters() {
     }
 }
 
+/// One trace call on a handle's words: (handle, ray, out, stack, stats).
+type Trace = unsafe fn(
+    *const [u64; 32],
+    *const CorayRay,
+    *mut u8,
+    *mut u8,
+    *mut CorayTraceStats,
+) -> CorayStatus;
+
 /// The one-ray calls check their buffers on their own path (spans known
-/// at compile time, not the array calls' region list): every placement of
-/// ray, hit, stack and statistics gets the status the array call gives for
-/// one ray, and a refused call writes nothing.
-#[test]
-fn the_one_ray_calls_refuse_what_the_array_calls_refuse() {
+/// at compile time, not the array calls' region list): for one family,
+/// every placement of ray, out, stack and statistics gets the status the
+/// array call gives for one ray, and a refused call writes nothing.
+/// `calls` are intersect1, intersect (count 1), occluded1, occluded
+/// (count 1); `open` builds and opens the family's structure over a scene;
+/// `ray` hits the floor.
+fn one_ray_parity(
+    family: &str,
+    open: impl Fn(&CorayScene) -> (Vec<Block>, [u64; 32]),
+    ray: CorayRay,
+    calls: [(&str, usize, Trace); 4],
+) {
     // One block of memory holds the scene's vertices, the ray, the output,
     // the statistics and the stack, so that each can be put over another.
     const STACK: usize = 1024;
@@ -449,13 +465,13 @@ fn the_one_ray_calls_refuse_what_the_array_calls_refuse() {
     let mut mem = arena(16384);
     let base = mem.as_mut_ptr().cast::<u8>();
     let f = floor();
-    // SAFETY (whole test): every offset below lies inside `mem`, aligned
-    // for its type; the calls get raw pointers only.
+    // SAFETY (whole function): every offset below lies inside `mem`,
+    // aligned for its type; the calls get raw pointers only.
     unsafe {
         core::ptr::copy_nonoverlapping(f.vertices.as_ptr(), base.cast::<f32>(), 12);
         let mut s = scene(&f);
         s.vertices = base.cast::<f32>();
-        let (tree_arena, t) = kd(&s);
+        let (tree_arena, h) = open(&s);
         let at = |off: usize| base.add(off);
         let stats_at = |off: usize| {
             let p = at(off).cast::<CorayTraceStats>();
@@ -465,15 +481,13 @@ fn the_one_ray_calls_refuse_what_the_array_calls_refuse() {
             });
             p
         };
-        at(RAY).cast::<CorayRay>().write(down());
-        let arena_hit = tree_arena.as_ptr().cast::<u8>().add(64) as *mut CorayHit;
-        let mut handle_copy = t;
-        let zeroed = CorayKdTree { opaque: [0; 32] };
-        // (what, handle, traversal, ray, out, stack, stats, the status).
+        let arena_out = tree_arena.as_ptr().cast::<u8>().add(64) as *mut u8;
+        let mut handle_copy = h;
+        let zeroed = [0u64; 32];
+        // (what, handle, ray, out, stack, stats, the status).
         type Case = (
             &'static str,
-            *const CorayKdTree,
-            CorayTraversal,
+            *const [u64; 32],
             usize,
             *mut u8,
             *mut u8,
@@ -483,11 +497,11 @@ fn the_one_ray_calls_refuse_what_the_array_calls_refuse() {
         let ok = CorayStatus::Ok;
         let bad = CorayStatus::InvalidParameter;
         let none = core::ptr::null_mut::<CorayTraceStats>();
+        let hp: *const [u64; 32] = &h;
         let cases: Vec<Case> = vec![
             (
                 "clean, no statistics",
-                &t,
-                0,
+                hp,
                 RAY,
                 at(HIT),
                 at(STACK),
@@ -496,40 +510,28 @@ fn the_one_ray_calls_refuse_what_the_array_calls_refuse() {
             ),
             (
                 "clean, statistics",
-                &t,
-                1,
+                hp,
                 RAY,
                 at(HIT),
                 at(STACK),
                 stats_at(STATS),
                 ok,
             ),
+            ("out over the ray", hp, RAY, at(RAY), at(STACK), none, bad),
             (
-                "out over the ray",
-                &t,
-                0,
+                "out at the stack's start",
+                hp,
                 RAY,
-                at(RAY),
                 at(STACK),
-                none,
-                bad,
-            ),
-            (
-                "out inside the stack",
-                &t,
-                0,
-                RAY,
-                at(STACK + 64),
                 at(STACK),
                 none,
                 bad,
             ),
             (
                 "out inside the arena",
-                &t,
-                0,
+                hp,
                 RAY,
-                arena_hit.cast(),
+                arena_out,
                 at(STACK),
                 none,
                 bad,
@@ -537,27 +539,16 @@ fn the_one_ray_calls_refuse_what_the_array_calls_refuse() {
             (
                 "out inside the handle",
                 &handle_copy,
-                0,
                 RAY,
-                (&mut handle_copy as *mut CorayKdTree).cast(),
+                (&mut handle_copy as *mut [u64; 32]).cast(),
                 at(STACK),
                 none,
                 bad,
             ),
-            (
-                "stack over the ray",
-                &t,
-                0,
-                RAY,
-                at(HIT),
-                at(RAY - 256),
-                none,
-                bad,
-            ),
+            ("stack at the ray", hp, RAY, at(HIT), at(RAY), none, bad),
             (
                 "stack over the vertices",
-                &t,
-                0,
+                hp,
                 RAY,
                 at(HIT),
                 at(0),
@@ -566,8 +557,7 @@ fn the_one_ray_calls_refuse_what_the_array_calls_refuse() {
             ),
             (
                 "statistics over the out",
-                &t,
-                0,
+                hp,
                 RAY,
                 at(HIT),
                 at(STACK),
@@ -575,19 +565,17 @@ fn the_one_ray_calls_refuse_what_the_array_calls_refuse() {
                 bad,
             ),
             (
-                "statistics inside the stack",
-                &t,
-                0,
+                "statistics at the stack's start",
+                hp,
                 RAY,
                 at(HIT),
                 at(STACK),
-                stats_at(STACK + 512),
+                stats_at(STACK),
                 bad,
             ),
             (
                 "statistics over the ray",
-                &t,
-                0,
+                hp,
                 RAY,
                 at(HIT),
                 at(STACK),
@@ -596,8 +584,7 @@ fn the_one_ray_calls_refuse_what_the_array_calls_refuse() {
             ),
             (
                 "misaligned statistics",
-                &t,
-                0,
+                hp,
                 RAY,
                 at(HIT),
                 at(STACK),
@@ -606,8 +593,7 @@ fn the_one_ray_calls_refuse_what_the_array_calls_refuse() {
             ),
             (
                 "misaligned stack",
-                &t,
-                0,
+                hp,
                 RAY,
                 at(HIT),
                 at(STACK + 4),
@@ -616,8 +602,7 @@ fn the_one_ray_calls_refuse_what_the_array_calls_refuse() {
             ),
             (
                 "no stack",
-                &t,
-                0,
+                hp,
                 RAY,
                 at(HIT),
                 core::ptr::null_mut(),
@@ -625,19 +610,26 @@ fn the_one_ray_calls_refuse_what_the_array_calls_refuse() {
                 CorayStatus::NullPointer,
             ),
             (
-                "a handle never opened",
-                &zeroed,
+                "no ray",
+                hp,
                 0,
-                RAY,
                 at(HIT),
                 at(STACK),
                 none,
-                bad,
+                CorayStatus::NullPointer,
             ),
             (
-                "an unknown traversal",
-                &t,
-                9,
+                "no out",
+                hp,
+                RAY,
+                core::ptr::null_mut(),
+                at(STACK),
+                none,
+                CorayStatus::NullPointer,
+            ),
+            (
+                "a handle never opened",
+                &zeroed,
                 RAY,
                 at(HIT),
                 at(STACK),
@@ -645,94 +637,283 @@ fn the_one_ray_calls_refuse_what_the_array_calls_refuse() {
                 bad,
             ),
         ];
-        for (what, h, m, ray, out, stack, stats, want) in cases {
-            let ray = at(ray).cast::<CorayRay>();
-            at(RAY).cast::<CorayRay>().write(down());
-            // The same call four ways: intersect and occluded, one ray and
-            // an array of one.
+        for (what, h, ray_at, out, stack, stats, want) in cases {
+            let r: *const CorayRay = if ray_at == 0 {
+                core::ptr::null()
+            } else {
+                at(ray_at).cast()
+            };
+            at(RAY).cast::<CorayRay>().write(ray);
             let fill = 0xA5u8;
-            let calls: [(&str, usize, &dyn Fn() -> CorayStatus); 4] = [
-                ("intersect1", size_of::<CorayHit>(), &|| {
-                    coray_kdtree_intersect1(
-                        h,
-                        m,
-                        ray,
-                        out.cast(),
-                        stack.cast(),
-                        CORAY_KDTREE_STACK_BYTES,
-                        stats,
-                    )
-                }),
-                ("intersect", size_of::<CorayHit>(), &|| {
-                    coray_kdtree_intersect(
-                        h,
-                        m,
-                        ray,
-                        out.cast(),
-                        1,
-                        stack.cast(),
-                        CORAY_KDTREE_STACK_BYTES,
-                        stats,
-                    )
-                }),
-                ("occluded1", 1, &|| {
-                    coray_kdtree_occluded1(
-                        h,
-                        m,
-                        ray,
-                        out,
-                        stack.cast(),
-                        CORAY_KDTREE_STACK_BYTES,
-                        stats,
-                    )
-                }),
-                ("occluded", 1, &|| {
-                    coray_kdtree_occluded(
-                        h,
-                        m,
-                        ray,
-                        out,
-                        1,
-                        stack.cast(),
-                        CORAY_KDTREE_STACK_BYTES,
-                        stats,
-                    )
-                }),
-            ];
             let mut answers = Vec::new();
             for (name, bytes, call) in calls {
-                // Outputs that lie in the caller's free memory are filled
-                // first: a refused call must leave them so.
+                // Outputs in the caller's free memory are filled first: a
+                // refused call must leave them so.
                 let free = out >= at(HIT) && out < at(STATS);
                 if free {
                     core::ptr::write_bytes(out, fill, bytes);
                 }
                 let arena_before = tree_arena.iter().map(|b| b.0).collect::<Vec<_>>();
-                assert_eq!(call(), want, "{what}: {name}");
-                if want != ok {
-                    if free {
-                        let o = core::slice::from_raw_parts(out, bytes);
-                        assert!(o.iter().all(|&b| b == fill), "{what}: {name} wrote");
-                    }
-                    assert!(
-                        tree_arena.iter().map(|b| b.0).eq(arena_before),
-                        "{what}: {name} wrote into the arena"
-                    );
-                } else {
+                assert_eq!(
+                    call(h, r, out, stack, stats),
+                    want,
+                    "{family}, {what}: {name}"
+                );
+                if want == ok {
                     answers.push(core::slice::from_raw_parts(out, bytes).to_vec());
+                    continue;
                 }
+                if free {
+                    let o = core::slice::from_raw_parts(out, bytes);
+                    assert!(
+                        o.iter().all(|&b| b == fill),
+                        "{family}, {what}: {name} wrote"
+                    );
+                }
+                assert!(
+                    tree_arena.iter().map(|b| b.0).eq(arena_before),
+                    "{family}, {what}: {name} wrote into the arena"
+                );
             }
             if want == ok {
+                assert_eq!(answers[0], answers[1], "{family}, {what}: hits differ");
+                assert_eq!(answers[2], answers[3], "{family}, {what}: answers differ");
                 assert_eq!(
-                    answers[0], answers[1],
-                    "{what}: one-ray and array hits differ"
+                    answers[2],
+                    [1],
+                    "{family}, {what}: the floor blocks the ray"
                 );
-                assert_eq!(
-                    answers[2], answers[3],
-                    "{what}: one-ray and array answers differ"
-                );
-                assert_eq!(answers[2], [1], "{what}: the floor blocks the ray");
+                let hit = answers[0].as_ptr().cast::<CorayHit>().read_unaligned();
+                assert_eq!(hit.geom_id, CORAY_GEOM_TRIANGLES, "{family}, {what}");
             }
         }
+    }
+}
+
+const KD_STACK: usize = CORAY_KDTREE_STACK_BYTES;
+
+#[test]
+fn the_kd_one_ray_calls_refuse_what_the_array_calls_refuse() {
+    let open = |s: &CorayScene| {
+        let (a, t) = kd(s);
+        (a, t.opaque)
+    };
+    let calls: [(&str, usize, Trace); 4] = [
+        (
+            "intersect1",
+            size_of::<CorayHit>(),
+            |h, r, o, s, st| unsafe {
+                coray_kdtree_intersect1(h.cast(), 0, r, o.cast(), s.cast(), KD_STACK, st)
+            },
+        ),
+        (
+            "intersect",
+            size_of::<CorayHit>(),
+            |h, r, o, s, st| unsafe {
+                coray_kdtree_intersect(h.cast(), 0, r, o.cast(), 1, s.cast(), KD_STACK, st)
+            },
+        ),
+        ("occluded1", 1, |h, r, o, s, st| unsafe {
+            coray_kdtree_occluded1(h.cast(), 1, r, o, s.cast(), KD_STACK, st)
+        }),
+        ("occluded", 1, |h, r, o, s, st| unsafe {
+            coray_kdtree_occluded(h.cast(), 1, r, o, 1, s.cast(), KD_STACK, st)
+        }),
+    ];
+    one_ray_parity("kd", open, down(), calls);
+    // An unknown traversal is refused first, by both.
+    let f = floor();
+    let s = scene(&f);
+    let (_a, t) = kd(&s);
+    let mut stack = arena(KD_STACK);
+    let mut hit = CorayHit::default();
+    let sp = stack.as_mut_ptr().cast();
+    let none = core::ptr::null_mut();
+    unsafe {
+        assert_eq!(
+            coray_kdtree_intersect1(&t, 9, &down(), &mut hit, sp, KD_STACK, none),
+            CorayStatus::InvalidParameter
+        );
+        assert_eq!(
+            coray_kdtree_intersect(&t, 9, &down(), &mut hit, 1, sp, KD_STACK, none),
+            CorayStatus::InvalidParameter
+        );
+    }
+}
+
+/// A hierarchy's stack: generous for the two-triangle floor.
+const BVH_STACK: usize = 1024;
+
+#[test]
+fn the_bvh_one_ray_calls_refuse_what_the_array_calls_refuse() {
+    let open = |s: &CorayScene| {
+        let p = coray_bvh_params_default(CORAY_BVH_BUILDER_TDBS);
+        let mut r = requirements();
+        unsafe {
+            assert_eq!(coray_bvh_requirements(2, &p, &mut r), CorayStatus::Ok);
+            let mut a = arena(r.arena_bytes);
+            let mut sc = arena(r.scratch_bytes);
+            let null = core::ptr::null_mut();
+            let (ap, bytes) = (a.as_mut_ptr().cast(), r.arena_bytes);
+            let st = coray_bvh_build(
+                s,
+                &p,
+                ap,
+                bytes,
+                sc.as_mut_ptr().cast(),
+                r.scratch_bytes,
+                null,
+            );
+            assert_eq!(st, CorayStatus::Ok);
+            let mut h = CorayBvh { opaque: [0; 32] };
+            assert_eq!(coray_bvh_open(ap, bytes, s, &mut h), CorayStatus::Ok);
+            (a, h.opaque)
+        }
+    };
+    let calls: [(&str, usize, Trace); 4] = [
+        (
+            "intersect1",
+            size_of::<CorayHit>(),
+            |h, r, o, s, st| unsafe {
+                coray_bvh_intersect1(h.cast(), r, o.cast(), s.cast(), BVH_STACK, st)
+            },
+        ),
+        (
+            "intersect",
+            size_of::<CorayHit>(),
+            |h, r, o, s, st| unsafe {
+                coray_bvh_intersect(h.cast(), r, o.cast(), 1, s.cast(), BVH_STACK, st)
+            },
+        ),
+        ("occluded1", 1, |h, r, o, s, st| unsafe {
+            coray_bvh_occluded1(h.cast(), r, o, s.cast(), BVH_STACK, st)
+        }),
+        ("occluded", 1, |h, r, o, s, st| unsafe {
+            coray_bvh_occluded(h.cast(), r, o, 1, s.cast(), BVH_STACK, st)
+        }),
+    ];
+    one_ray_parity("bvh", open, down(), calls);
+}
+
+#[test]
+fn the_proj_one_ray_calls_refuse_what_the_array_calls_refuse() {
+    let open = |s: &CorayScene| unsafe {
+        let mut plane = CorayProjPlane {
+            struct_size: size_of::<CorayProjPlane>(),
+            ..Default::default()
+        };
+        assert_eq!(
+            coray_proj_camera_plane(&camera(), &mut plane),
+            CorayStatus::Ok
+        );
+        let p = coray_proj_params_default(CORAY_PROJ_CRITERIA_2D, CORAY_BVH_BUILDER_NN_CHAIN);
+        let mut r = requirements();
+        assert_eq!(coray_proj_requirements(2, &p, &mut r), CorayStatus::Ok);
+        let mut a = arena(r.arena_bytes);
+        let mut sc = arena(r.scratch_bytes);
+        let null = core::ptr::null_mut();
+        let (ap, bytes) = (a.as_mut_ptr().cast(), r.arena_bytes);
+        let st = coray_proj_build(
+            s,
+            &p,
+            &plane,
+            ap,
+            bytes,
+            sc.as_mut_ptr().cast(),
+            r.scratch_bytes,
+            null,
+        );
+        assert_eq!(st, CorayStatus::Ok);
+        let mut h = CorayProj { opaque: [0; 32] };
+        assert_eq!(coray_proj_open(ap, bytes, s, &mut h), CorayStatus::Ok);
+        (a, h.opaque)
+    };
+    // A camera ray from the eye towards the floor's centre.
+    let c = camera();
+    let ray = CorayRay {
+        org: c.from,
+        tnear: 0.0,
+        dir: [0.0, -1.0, 1.0],
+        tfar: f32::INFINITY,
+    };
+    let calls: [(&str, usize, Trace); 4] = [
+        (
+            "intersect1",
+            size_of::<CorayHit>(),
+            |h, r, o, s, st| unsafe {
+                coray_proj_intersect1(
+                    h.cast(),
+                    CORAY_PROJ_SCHEME_2D,
+                    r,
+                    o.cast(),
+                    s.cast(),
+                    BVH_STACK,
+                    st,
+                )
+            },
+        ),
+        (
+            "intersect",
+            size_of::<CorayHit>(),
+            |h, r, o, s, st| unsafe {
+                coray_proj_intersect(
+                    h.cast(),
+                    CORAY_PROJ_SCHEME_2D,
+                    r,
+                    o.cast(),
+                    1,
+                    s.cast(),
+                    BVH_STACK,
+                    st,
+                )
+            },
+        ),
+        ("occluded1", 1, |h, r, o, s, st| unsafe {
+            coray_proj_occluded1(
+                h.cast(),
+                CORAY_PROJ_SCHEME_2D,
+                r,
+                o,
+                s.cast(),
+                BVH_STACK,
+                st,
+            )
+        }),
+        ("occluded", 1, |h, r, o, s, st| unsafe {
+            coray_proj_occluded(
+                h.cast(),
+                CORAY_PROJ_SCHEME_2D,
+                r,
+                o,
+                1,
+                s.cast(),
+                BVH_STACK,
+                st,
+            )
+        }),
+    ];
+    one_ray_parity("proj", open, ray, calls);
+    // A ray off the plane's eye: refused by both, after the buffers.
+    let f = floor();
+    let s = scene(&f);
+    let (_a, h) = open(&s);
+    let mut stack = arena(BVH_STACK);
+    let mut hit = CorayHit::default();
+    let (sp, none) = (stack.as_mut_ptr().cast(), core::ptr::null_mut());
+    let hp = (&h as *const [u64; 32]).cast::<CorayProj>();
+    let sc = CORAY_PROJ_SCHEME_2D;
+    unsafe {
+        assert_eq!(
+            coray_proj_intersect1(hp, sc, &down(), &mut hit, sp, BVH_STACK, none),
+            CorayStatus::InvalidParameter
+        );
+        assert_eq!(
+            coray_proj_intersect(hp, sc, &down(), &mut hit, 1, sp, BVH_STACK, none),
+            CorayStatus::InvalidParameter
+        );
+        assert_eq!(
+            coray_proj_intersect1(hp, 77, &ray, &mut hit, sp, BVH_STACK, none),
+            CorayStatus::InvalidParameter
+        );
     }
 }
