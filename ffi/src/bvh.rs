@@ -769,6 +769,39 @@ unsafe fn batch<O>(
     })
 }
 
+/// The body of the one-ray entry points: [`one_ray`] on a hierarchy,
+/// writing `answer` for the ray.
+///
+/// Safety: as `coray_bvh_intersect1`, with `out` one writable `O`.
+#[inline(always)]
+unsafe fn one<O>(
+    bvh: *const CorayBvh,
+    ray: *const CorayRay,
+    out: *mut O,
+    stack: *mut c_void,
+    stack_bytes: usize,
+    stats: *mut CorayTraceStats,
+    answer: impl FnOnce(&Bvh, &coray::Ray, &mut [BvhStackItem], &mut TraceStats) -> O,
+) -> CorayStatus {
+    guard(|| {
+        // SAFETY: forwarded caller contract.
+        unsafe {
+            one_ray(
+                bvh.cast(),
+                KIND_BVH,
+                |h| Ok(view_of(h, h.scene())?.1),
+                |b| b.stack_len(),
+                ray,
+                out,
+                stack,
+                stack_bytes,
+                stats,
+                |b, r, s, st| Ok(answer(b, r, s, st)),
+            )
+        }
+    })
+}
+
 /// Closest hits of `count` rays: `hits[i]` for `rays[i]`. `stack` is the
 /// caller's traversal stack of `stack_bytes` (at least the info's
 /// `stack_bytes`, 16-byte aligned; one per thread). `stats` may be NULL.
@@ -818,23 +851,12 @@ pub unsafe extern "C" fn coray_bvh_intersect1(
     if ray.is_null() || hit.is_null() {
         return CorayStatus::NullPointer;
     }
-    guard(|| {
-        // SAFETY: forwarded caller contract.
-        unsafe {
-            one_ray(
-                bvh.cast(),
-                KIND_BVH,
-                |h| Ok(view_of(h, h.scene())?.1),
-                |b| b.stack_len(),
-                ray,
-                hit,
-                stack,
-                stack_bytes,
-                stats,
-                |b, r, s: &mut [BvhStackItem], st| Ok(b.intersect(r, s, st).into()),
-            )
-        }
-    })
+    // SAFETY: forwarded caller contract.
+    unsafe {
+        one(bvh, ray, hit, stack, stack_bytes, stats, |b, r, s, st| {
+            b.intersect(r, s, st).into()
+        })
+    }
 }
 
 /// Any-hit queries (shadow rays): `occluded[i]` is 1 when something lies
@@ -882,21 +904,16 @@ pub unsafe extern "C" fn coray_bvh_occluded1(
     if ray.is_null() || occluded.is_null() {
         return CorayStatus::NullPointer;
     }
-    guard(|| {
-        // SAFETY: forwarded caller contract.
-        unsafe {
-            one_ray(
-                bvh.cast(),
-                KIND_BVH,
-                |h| Ok(view_of(h, h.scene())?.1),
-                |b| b.stack_len(),
-                ray,
-                occluded,
-                stack,
-                stack_bytes,
-                stats,
-                |b, r, s: &mut [BvhStackItem], st| Ok(b.occluded(r, s, st) as u8),
-            )
-        }
-    })
+    // SAFETY: forwarded caller contract.
+    unsafe {
+        one(
+            bvh,
+            ray,
+            occluded,
+            stack,
+            stack_bytes,
+            stats,
+            |b, r, s, st| b.occluded(r, s, st) as u8,
+        )
+    }
 }

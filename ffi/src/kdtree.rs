@@ -641,6 +641,42 @@ unsafe fn batch<O>(
     })
 }
 
+/// The body of the one-ray entry points: [`one_ray`] on a kd-tree, by
+/// `traversal`, writing `answer` for the ray.
+///
+/// Safety: as `coray_kdtree_intersect1`, with `out` one writable `O`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+unsafe fn one<O>(
+    tree: *const CorayKdTree,
+    traversal: CorayTraversal,
+    ray: *const CorayRay,
+    out: *mut O,
+    stack: *mut c_void,
+    stack_bytes: usize,
+    stats: *mut CorayTraceStats,
+    answer: impl FnOnce(&KdTree, &coray::Ray, Traversal, &mut [KdStackItem], &mut TraceStats) -> O,
+) -> CorayStatus {
+    guard(|| {
+        let method = self::traversal(traversal)?;
+        // SAFETY: forwarded caller contract.
+        unsafe {
+            one_ray(
+                tree.cast(),
+                KIND_KD,
+                |h| tree_of(h, h.scene()),
+                |_| KD_STACK_LEN,
+                ray,
+                out,
+                stack,
+                stack_bytes,
+                stats,
+                |t, r, s, st| Ok(answer(t, r, method, s, st)),
+            )
+        }
+    })
+}
+
 /// Closest hits of up to [`PACKET_LANES`] rays, written in place (the
 /// caller's array is the core's).
 fn intersect_chunk(
@@ -730,26 +766,19 @@ pub unsafe extern "C" fn coray_kdtree_intersect1(
     stack_bytes: usize,
     stats: *mut CorayTraceStats,
 ) -> CorayStatus {
-    guard(|| {
-        let method = self::traversal(traversal)?;
-        // SAFETY: forwarded caller contract.
-        unsafe {
-            one_ray(
-                tree.cast(),
-                KIND_KD,
-                |h| tree_of(h, h.scene()),
-                |_| KD_STACK_LEN,
-                ray,
-                hit,
-                stack,
-                stack_bytes,
-                stats,
-                |t, r, s: &mut [KdStackItem], st| {
-                    Ok(CorayHit::from(KdTree::intersect(t, r, method, s, st)))
-                },
-            )
-        }
-    })
+    // SAFETY: forwarded caller contract.
+    unsafe {
+        one(
+            tree,
+            traversal,
+            ray,
+            hit,
+            stack,
+            stack_bytes,
+            stats,
+            |t, r, m, s, st| CorayHit::from(KdTree::intersect(t, r, m, s, st)),
+        )
+    }
 }
 
 /// Any-hit queries (shadow rays) of `count` rays: `occluded[i]` is 1 when
@@ -797,22 +826,17 @@ pub unsafe extern "C" fn coray_kdtree_occluded1(
     stack_bytes: usize,
     stats: *mut CorayTraceStats,
 ) -> CorayStatus {
-    guard(|| {
-        let method = self::traversal(traversal)?;
-        // SAFETY: forwarded caller contract.
-        unsafe {
-            one_ray(
-                tree.cast(),
-                KIND_KD,
-                |h| tree_of(h, h.scene()),
-                |_| KD_STACK_LEN,
-                ray,
-                occluded,
-                stack,
-                stack_bytes,
-                stats,
-                |t, r, s: &mut [KdStackItem], st| Ok(KdTree::occluded(t, r, method, s, st) as u8),
-            )
-        }
-    })
+    // SAFETY: forwarded caller contract.
+    unsafe {
+        one(
+            tree,
+            traversal,
+            ray,
+            occluded,
+            stack,
+            stack_bytes,
+            stats,
+            |t, r, m, s, st| KdTree::occluded(t, r, m, s, st) as u8,
+        )
+    }
 }

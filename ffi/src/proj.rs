@@ -742,6 +742,55 @@ unsafe fn batch<O>(
     })
 }
 
+/// The body of the one-ray entry points: [`one_ray`] on a projection
+/// hierarchy, by `scheme_id`; the ray must lie on a line through the
+/// plane's eye (checked after the buffers, as the array call does).
+///
+/// Safety: as `coray_proj_intersect1`, with `out` one writable `O`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+unsafe fn one<O>(
+    proj: *const CorayProj,
+    scheme_id: CorayProjScheme,
+    ray: *const CorayRay,
+    out: *mut O,
+    stack: *mut c_void,
+    stack_bytes: usize,
+    stats: *mut CorayTraceStats,
+    answer: impl FnOnce(
+        &ProjHierarchy,
+        &Ray,
+        ProjScheme,
+        &mut [BvhStackItem],
+        &mut TraceStats,
+    ) -> Option<O>,
+) -> CorayStatus {
+    guard(|| {
+        let sc = scheme(scheme_id)?;
+        // SAFETY: forwarded caller contract.
+        unsafe {
+            one_ray(
+                proj.cast(),
+                KIND_PROJ,
+                |h| Ok(view_of(h, h.scene())?.1),
+                |p| p.stack_len(),
+                ray,
+                out,
+                stack,
+                stack_bytes,
+                stats,
+                |p, r, s, st| {
+                    if p.project(r).is_none() {
+                        return Err(CorayStatus::InvalidParameter);
+                    }
+                    // Checked above: a refusal here would be a defect.
+                    answer(p, r, sc, s, st).ok_or(CorayStatus::InternalError)
+                },
+            )
+        }
+    })
+}
+
 /// Closest hits of `count` rays by `scheme`. Every ray must lie on a line
 /// through the plane's eye: a camera ray that starts at the eye, or a ray
 /// towards the eye that ends at it or before (for an orthographic plane:
@@ -793,34 +842,19 @@ pub unsafe extern "C" fn coray_proj_intersect1(
     if ray.is_null() || hit.is_null() {
         return CorayStatus::NullPointer;
     }
-    guard(|| {
-        let sc = self::scheme(scheme)?;
-        // SAFETY: forwarded caller contract.
-        unsafe {
-            one_ray(
-                proj.cast(),
-                KIND_PROJ,
-                |h| Ok(view_of(h, h.scene())?.1),
-                |p| p.stack_len(),
-                ray,
-                hit,
-                stack,
-                stack_bytes,
-                stats,
-                |p, r, s: &mut [BvhStackItem], st| {
-                    // The ray must lie on a line through the plane's eye
-                    // (checked after the buffers, as the array call does);
-                    // then a refusal would be a defect.
-                    if p.project(r).is_none() {
-                        return Err(CorayStatus::InvalidParameter);
-                    }
-                    p.intersect(r, sc, s, st)
-                        .map(Into::into)
-                        .ok_or(CorayStatus::InternalError)
-                },
-            )
-        }
-    })
+    // SAFETY: forwarded caller contract.
+    unsafe {
+        one(
+            proj,
+            scheme,
+            ray,
+            hit,
+            stack,
+            stack_bytes,
+            stats,
+            |p, r, sc, s, st| p.intersect(r, sc, s, st).map(Into::into),
+        )
+    }
 }
 
 /// Any-hit queries (shadow rays towards the plane's light), as
@@ -871,32 +905,17 @@ pub unsafe extern "C" fn coray_proj_occluded1(
     if ray.is_null() || occluded.is_null() {
         return CorayStatus::NullPointer;
     }
-    guard(|| {
-        let sc = self::scheme(scheme)?;
-        // SAFETY: forwarded caller contract.
-        unsafe {
-            one_ray(
-                proj.cast(),
-                KIND_PROJ,
-                |h| Ok(view_of(h, h.scene())?.1),
-                |p| p.stack_len(),
-                ray,
-                occluded,
-                stack,
-                stack_bytes,
-                stats,
-                |p, r, s: &mut [BvhStackItem], st| {
-                    // The ray must lie on a line through the plane's eye
-                    // (checked after the buffers, as the array call does);
-                    // then a refusal would be a defect.
-                    if p.project(r).is_none() {
-                        return Err(CorayStatus::InvalidParameter);
-                    }
-                    p.occluded(r, sc, s, st)
-                        .map(u8::from)
-                        .ok_or(CorayStatus::InternalError)
-                },
-            )
-        }
-    })
+    // SAFETY: forwarded caller contract.
+    unsafe {
+        one(
+            proj,
+            scheme,
+            ray,
+            occluded,
+            stack,
+            stack_bytes,
+            stats,
+            |p, r, sc, s, st| p.occluded(r, sc, s, st).map(u8::from),
+        )
+    }
 }
