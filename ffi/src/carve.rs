@@ -78,8 +78,8 @@ const _: () = {
 /// no range.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub(crate) struct Span {
-    start: u64,
-    end: u64,
+    start: usize,
+    end: usize,
 }
 
 impl Span {
@@ -89,10 +89,10 @@ impl Span {
         if bytes == 0 {
             return Span::default();
         }
-        let start = p as usize as u64;
+        let start = p as usize;
         Span {
             start,
-            end: start.saturating_add(bytes as u64),
+            end: start.saturating_add(bytes),
         }
     }
 
@@ -113,8 +113,8 @@ impl Span {
 /// SIMD lanes.
 #[derive(Clone, Copy)]
 pub(crate) struct ReadSpans<const N: usize> {
-    start: [u64; N],
-    end: [u64; N],
+    start: [usize; N],
+    end: [usize; N],
 }
 
 impl<const N: usize> ReadSpans<N> {
@@ -135,21 +135,22 @@ impl<const N: usize> ReadSpans<N> {
 
 /// Whether a `written` span meets a `read` one or another written one
 /// (reads may share memory with each other). Branch-free over the pairs.
-/// When every end lies below 2^63 (always, for real addresses), "a < b"
-/// is the sign bit of `a - b`: a pair is two subtractions and an AND,
-/// ORed over all pairs and tested once, on SIMD lanes where the compiler
-/// can; otherwise every pair is compared.
+/// When every end lies in the lower half of the address space (always,
+/// for a 64-bit process's addresses), "a < b" is the top bit of `a - b`:
+/// a pair is two subtractions and an AND, ORed over all pairs and tested
+/// once; otherwise every pair is compared.
 #[inline(always)]
 pub(crate) fn overlap<const N: usize>(written: &[Span], read: &ReadSpans<N>) -> bool {
     let top = written.iter().fold(0, |o, w| o | w.end) | read.end.iter().fold(0, |o, e| o | e);
-    if top >> 63 == 0 {
+    const TOP: u32 = usize::BITS - 1;
+    if top >> TOP == 0 {
         let signs = any_pair(written, read, |w, s, e| {
             w.start.wrapping_sub(e) & s.wrapping_sub(w.end)
         });
-        signs >> 63 != 0
+        signs >> TOP != 0
     } else {
         any_pair(written, read, |w, s, e| {
-            ((w.start < e) & (s < w.end)) as u64
+            ((w.start < e) & (s < w.end)) as usize
         }) != 0
     }
 }
@@ -160,8 +161,8 @@ pub(crate) fn overlap<const N: usize>(written: &[Span], read: &ReadSpans<N>) -> 
 fn any_pair<const N: usize>(
     written: &[Span],
     read: &ReadSpans<N>,
-    meets: impl Fn(Span, u64, u64) -> u64,
-) -> u64 {
+    meets: impl Fn(Span, usize, usize) -> usize,
+) -> usize {
     let mut o = 0;
     for (i, w) in written.iter().enumerate() {
         o |= read
@@ -629,7 +630,7 @@ mod tests {
     fn both_overlap_tests_agree_on_every_pair() {
         // Spans over 0..8 (and at the top of memory, where only the exact
         // test runs): the sign-bit test and the comparisons agree.
-        let spans = |base: u64| {
+        let spans = |base: usize| {
             let mut v = std::vec![Span::default()];
             for a in 0..8 {
                 for b in a + 1..=8 {
@@ -641,7 +642,7 @@ mod tests {
             }
             v
         };
-        for base in [16u64, u64::MAX - 8] {
+        for base in [16usize, usize::MAX - 8] {
             for &w in &spans(base) {
                 for &r in &spans(base) {
                     let want = w != Span::default()
