@@ -789,7 +789,7 @@ unsafe fn one<O>(
             one_ray(
                 bvh.cast(),
                 KIND_BVH,
-                |h| Ok(view_of(h, h.scene())?.1),
+                |h, s| Ok(view_of(h, s)?.1),
                 |b| b.stack_len(),
                 ray,
                 out,

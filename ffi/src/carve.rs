@@ -208,10 +208,15 @@ impl Regions {
     /// Adds `bytes` at `p` (nothing for an empty range).
     #[inline(always)]
     pub(crate) fn add<T>(&mut self, p: *const T, bytes: usize, written: bool) -> &mut Regions {
-        if bytes == 0 {
+        self.add_span(Span::of(p, bytes), written)
+    }
+
+    /// Adds `span` (nothing for an empty one).
+    #[inline(always)]
+    fn add_span(&mut self, span: Span, written: bool) -> &mut Regions {
+        if span == Span::default() {
             return self;
         }
-        let span = Span::of(p, bytes);
         if written {
             match self.written.get_mut(self.writes) {
                 Some(w) => *w = span,
@@ -234,10 +239,10 @@ impl Regions {
     /// Adds the four arrays of `s` as read.
     #[inline(always)]
     pub(crate) fn add_scene(&mut self, s: &coray::Scene) -> &mut Regions {
-        self.add(s.vertices.as_ptr(), size_of_val(s.vertices), false)
-            .add(s.triangles.as_ptr(), size_of_val(s.triangles), false)
-            .add(s.spheres.as_ptr(), size_of_val(s.spheres), false)
-            .add(s.cones.as_ptr(), size_of_val(s.cones), false)
+        for span in Span::of_scene(s) {
+            self.add_span(span, false);
+        }
+        self
     }
 
     /// `InvalidParameter` when a written range overlaps another.

@@ -664,7 +664,7 @@ unsafe fn one<O>(
             one_ray(
                 tree.cast(),
                 KIND_KD,
-                |h| tree_of(h, h.scene()),
+                |h, s| tree_of(h, s),
                 |_| KD_STACK_LEN,
                 ray,
                 out,

@@ -8,7 +8,7 @@ use crate::abi::{CorayRay, CorayTraceStats};
 use crate::carve::{self, Out, Plain, ReadSpans, Span};
 use crate::handle::{self, Sealed};
 use crate::CorayStatus;
-use coray::TraceStats;
+use coray::{Scene, TraceStats};
 use core::ffi::c_void;
 use core::mem::size_of;
 
@@ -16,7 +16,7 @@ use core::mem::size_of;
 /// writes the answer to `out`.
 ///
 /// In order: the handle (null, alignment, seal, then `view`'s header
-/// checks), the ray and `out` (null, alignment), the stack (`stack_len`
+/// checks of the arena over the handle's scene), the ray and `out` (null, alignment), the stack (`stack_len`
 /// entries of `I`: null, alignment, size), the statistics (null allowed,
 /// alignment, `struct_size`), then no written buffer (stack, `out`,
 /// statistics) may overlap another or anything read (handle, arena, scene
@@ -33,7 +33,7 @@ use core::mem::size_of;
 pub(crate) unsafe fn one_ray<'a, S, I: Plain, O>(
     handle: *const [u64; 32],
     kind: u64,
-    view: impl FnOnce(Sealed<'a>) -> Result<S, CorayStatus>,
+    view: impl FnOnce(Sealed<'a>, Scene<'a>) -> Result<S, CorayStatus>,
     stack_len: impl FnOnce(&S) -> usize,
     ray: *const CorayRay,
     out: *mut O,
@@ -45,20 +45,19 @@ pub(crate) unsafe fn one_ray<'a, S, I: Plain, O>(
     // SAFETY: forwarded caller contract for every pointer; each is checked
     // (null, alignment, size) before it is read or viewed, and nothing is
     // written before the overlap check below.
-    let (h, s, r, stk, stats) = unsafe {
+    let (h, scene, s, r, stk, stats) = unsafe {
         let h = handle::read_unnoted(handle, kind)?;
-        let s = view(h)?;
+        let scene = h.scene();
+        let s = view(h, scene)?;
         carve::check_array(ray, 1)?;
         carve::check_array(out, 1)?;
         let need = stack_len(&s);
         let stk = carve::stack_unnoted::<I>(stack, stack_bytes, need)?;
         let stats = Out::open(stats, true)?;
-        (h, s, ray.read(), stk, stats)
+        (h, scene, s, ray.read(), stk, stats)
     };
     let [handle_words, arena] = h.spans();
-    // SAFETY: the scene's arrays were checked when the handle was opened
-    // and stay readable by the contract; only their addresses are used.
-    let [vertices, triangles, spheres, cones] = Span::of_scene(&unsafe { h.scene() });
+    let [vertices, triangles, spheres, cones] = Span::of_scene(&scene);
     let read = ReadSpans::<8>::new([
         handle_words,
         arena,

@@ -772,7 +772,7 @@ unsafe fn one<O>(
             one_ray(
                 proj.cast(),
                 KIND_PROJ,
-                |h| Ok(view_of(h, h.scene())?.1),
+                |h, s| Ok(view_of(h, s)?.1),
                 |p| p.stack_len(),
                 ray,
                 out,

@@ -390,13 +390,12 @@ impl<'a> KdTree<'a> {
         let mut budget = budget0;
         // Leaf visits that spent from the budget.
         let mut leaf_visits = 0usize;
-        let mut faulted = false;
-        let stopped = loop {
+        let stopped = 'walk: loop {
             let mut nd = self.node(node);
             while !nd.is_leaf() {
                 if budget == 0 {
-                    faulted = true;
-                    break;
+                    steps.fault();
+                    break 'walk true;
                 }
                 budget -= 1;
                 let (a, s, left) = (nd.axis() & 3, nd.split(), nd.left());
@@ -433,8 +432,8 @@ impl<'a> KdTree<'a> {
                     // A push: the only place the stack grows, so the only
                     // place its bound is checked.
                     if ex >= KD_STACK_LEN - 2 {
-                        faulted = true;
-                        break;
+                        steps.fault();
+                        break 'walk true;
                     }
                     if d.is_nan() {
                         // The segment lies in the plane (0 * inf): left,
@@ -460,10 +459,6 @@ impl<'a> KdTree<'a> {
                 }
                 nd = self.node(node);
             }
-            if faulted {
-                steps.fault();
-                break true;
-            }
             steps.leaves += 1;
             rec.leaf(node);
             // The leaf read again (not `nd`): the descent above then loads a
@@ -485,23 +480,18 @@ impl<'a> KdTree<'a> {
                 break true;
             }
             // Pop: the next segment starts where this one ended.
-            let next = loop {
+            loop {
                 let e = stack[ex];
                 if e.node == NO_NODE {
-                    break None;
+                    break 'walk false;
                 }
                 ex -= 1;
                 en_t = e.t;
                 if e.node != SKIP {
-                    break Some(e.node);
-                }
-            };
-            match next {
-                Some(n) => {
-                    node = n;
+                    node = e.node;
                     ex_t = stack[ex].t;
+                    break;
                 }
-                None => break false,
             }
         };
         steps.interior += (budget0 - budget - leaf_visits) as u64;
