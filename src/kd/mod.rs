@@ -13,7 +13,7 @@ mod build;
 mod build_jobs;
 pub mod layout;
 mod node;
-mod packet;
+pub(crate) mod packet;
 mod ropes;
 pub(crate) mod traverse;
 mod validate;

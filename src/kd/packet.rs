@@ -26,11 +26,11 @@
 // Index loops over the lanes, on purpose (see crate::geom::lanes).
 #![allow(clippy::needless_range_loop)]
 
-use super::node::{KdStackItem, KD_STACK_LEN};
+use super::node::{KdRopes, KdStackItem, KD_STACK_LEN};
 use super::traverse::{inside_leaf, tie_wins, Steps};
 use super::KdTree;
 use crate::geom::lanes::{F8, M8};
-use crate::geom::{intersect_triangle, Hit, PreparedRay, Ray, Vec3, GEOM_TRIANGLES};
+use crate::geom::{intersect_triangle, Aabb, Hit, PreparedRay, Ray, Vec3, GEOM_TRIANGLES};
 use crate::limits::KD_MAX_DEPTH;
 use crate::TraceStats;
 
@@ -152,6 +152,54 @@ impl Packet {
             ];
         }
         alike.count() == LANES as u32
+    }
+
+    /// Each valid lane's segment inside box `b` (the scene's trace box):
+    /// [`KdTree::scene_segment`]'s arithmetic lane by lane (every lane's
+    /// 1/dir is finite). Lanes that miss it, or hold no valid ray, get the
+    /// empty interval (+inf, -inf) and are clear in the mask.
+    #[inline(always)]
+    pub(crate) fn segment(&self, b: &Aabb) -> (F8, F8, M8) {
+        let (mut tn, mut tf) = (self.t_min, self.t_max);
+        for a in 0..3 {
+            let lo = (F8::splat(b.min[a]) - self.o[a]) * self.inv[a];
+            let hi = (F8::splat(b.max[a]) - self.o[a]) * self.inv[a];
+            let order = lo.le(hi);
+            tn = tn.max(order.select(lo, hi));
+            tf = tf.min(order.select(hi, lo));
+        }
+        let mut valid = M8::NONE;
+        for i in 0..LANES {
+            valid.0[i] = if self.valid[i] { u32::MAX } else { 0 };
+        }
+        let hit_box = valid & tn.le(tf);
+        (
+            hit_box.select(tn, INF),
+            hit_box.select(tf, NEG_INF),
+            hit_box,
+        )
+    }
+
+    /// Where each lane leaves the leaf box of `rp`, and through which face:
+    /// [`KdTree::leaf_exit`]'s arithmetic and tie rule lane by lane (the
+    /// packet's lanes share their direction signs, none of them zero).
+    #[inline(always)]
+    pub(crate) fn leaf_exit(&self, rp: &KdRopes) -> (F8, [u8; LANES]) {
+        let mut exit = INF;
+        let mut face = [0u8; LANES];
+        for a in 0..3 {
+            let bound = if self.up[a] { rp.max[a] } else { rp.min[a] };
+            let t = (F8::splat(bound) - self.o[a]) * self.inv[a];
+            let nearer = t.lt(exit);
+            exit = nearer.select(t, exit);
+            let f = (2 * a + self.up[a] as usize) as u8;
+            for i in 0..LANES {
+                if nearer.get(i) {
+                    face[i] = f;
+                }
+            }
+        }
+        (exit, face)
     }
 
     /// Lane `i` as the single ray's prepared form (for the cases a lane
@@ -717,24 +765,7 @@ impl KdTree<'_> {
         steps: &mut Steps,
         lane_steps: &mut [u32; LANES],
     ) {
-        // Each lane's segment inside the scene's box: scene_segment's
-        // arithmetic (Aabb::clip_ray; every lane's 1/dir is finite).
-        let b = self.trace_box;
-        let (mut tn, mut tf) = (p.t_min, p.t_max);
-        for a in 0..3 {
-            let lo = (F8::splat(b.min[a]) - p.o[a]) * p.inv[a];
-            let hi = (F8::splat(b.max[a]) - p.o[a]) * p.inv[a];
-            let order = lo.le(hi);
-            tn = tn.max(order.select(lo, hi));
-            tf = tf.min(order.select(hi, lo));
-        }
-        let mut valid = M8::NONE;
-        for i in 0..LANES {
-            valid.0[i] = if p.valid[i] { u32::MAX } else { 0 };
-        }
-        let hit_box = valid & tn.le(tf);
-        tn = hit_box.select(tn, INF);
-        tf = hit_box.select(tf, NEG_INF);
+        let (mut tn, mut tf, hit_box) = p.segment(&self.trace_box);
         let mut alive = hit_box.count();
         if alive == 0 {
             return;

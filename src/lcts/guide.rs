@@ -189,7 +189,7 @@ impl Cursor {
     /// The ray entered `leaf`, the one its rope leads to: on along the
     /// followed path if that is where it went too, else as [`Cursor::resync`].
     #[inline]
-    fn follow(&mut self, paths: &Paths, leaf: u32) {
+    pub(crate) fn follow(&mut self, paths: &Paths, leaf: u32) {
         match paths.slots.get(self.next as usize) {
             Some(&l) if l == leaf => self.next += 1,
             Some(_) => self.resync(paths, leaf),
@@ -343,9 +343,23 @@ pub(crate) fn walk_common(
             }
         }
     }
-    let Some(last) = last else {
-        return false;
-    };
+    match last {
+        Some(last) => walk_past(tree, v, last, t1, paths, cur, steps),
+        None => false,
+    }
+}
+
+/// Goes on past leaf node `last` (visited, no hit inside it) by guided
+/// ropes to `t1`. False when the ray must be redone hierarchically.
+pub(crate) fn walk_past(
+    tree: &KdTree,
+    v: &mut Closest,
+    last: u32,
+    t1: f32,
+    paths: &Paths,
+    cur: &mut Cursor,
+    steps: &mut Steps,
+) -> bool {
     let r = v.ray;
     let (t_exit, face) = tree.leaf_exit(&r, last);
     if t_exit > t1 {

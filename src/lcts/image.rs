@@ -18,12 +18,15 @@
 //! Past the common part, ropes are guided by the boundary rays' own leaves
 //! ([`super::guide`]): a ray asks the nearest corner first.
 
+use super::guide::Paths;
 use super::history::{trace_recorded_on, History, HistoryRecord};
 use super::hlcts::{self, Boundary, HlctsEntry, Source, MAX_RAYS};
-use super::slcts;
+use super::{slcts, window};
+use crate::geom::lanes::LANES;
 use crate::geom::{Camera, Hit};
 use crate::kd::{KdStackItem, KdTree, Traversal, KD_STACK_LEN};
 use crate::{Error, TraceStats};
+use crate::{Ray, Vec3};
 
 /// How an image is cast.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -366,19 +369,12 @@ pub fn cast_image_with(
                         count_window(&mut st, &seq);
                         let paths = seq.paths(&hs, &mut *path_buf);
                         let (x0, x1) = (corners(w, n, i), corners(w, n, i + 1));
+                        let mut batch = Batch::new(tree, &seq, &paths);
                         for x in x0 + 1..x1 {
                             let nearest = far_half(x, x0, x1);
-                            let hit = slcts::trace(
-                                tree,
-                                &seq,
-                                &paths,
-                                nearest,
-                                &ray(x, yj),
-                                stack,
-                                &mut st.trace,
-                            );
-                            put(x, yj, &hit);
+                            batch.push(x, yj, ray(x, yj), nearest, stack, &mut st.trace, &mut put);
                         }
+                        batch.flush(stack, &mut st.trace, &mut put);
                     }
                 } else if j > 0 {
                     let y_prev = corners(h, m, j - 1);
@@ -403,6 +399,7 @@ pub fn cast_image_with(
                         // row and column of windows own their leading edges.
                         let y_from = if j == 1 { y_prev } else { y_prev + 1 };
                         let x_from = if i == 0 { x0 } else { x0 + 1 };
+                        let mut batch = Batch::new(tree, &seq, &paths);
                         for y in y_from..=yj {
                             let corner_row = y == y_prev || y == yj;
                             for x in x_from..=x1 {
@@ -411,18 +408,18 @@ pub fn cast_image_with(
                                 }
                                 // Corners 0 and 1 on the top row, 2 and 3 below.
                                 let nearest = far_half(x, x0, x1) + 2 * far_half(y, y_prev, yj);
-                                let hit = slcts::trace(
-                                    tree,
-                                    &seq,
-                                    &paths,
+                                batch.push(
+                                    x,
+                                    y,
+                                    ray(x, y),
                                     nearest,
-                                    &ray(x, y),
                                     stack,
                                     &mut st.trace,
+                                    &mut put,
                                 );
-                                put(x, y, &hit);
                             }
                         }
+                        batch.flush(stack, &mut st.trace, &mut put);
                     }
                 }
                 if m > 1 {
@@ -440,6 +437,79 @@ fn count_window(st: &mut CastStats, seq: &slcts::Slcts) {
     st.windows_shared += (seq.leaves > 0) as u64;
     st.windows_terminated += seq.termination.is_some() as u64;
     st.windows_entered += (seq.leaves == 0 && seq.entry.is_some_and(|e| e.node != 0)) as u64;
+}
+
+/// Pixels of one SLCTS window waiting to be traced together
+/// ([`window::trace`]), up to a packet's worth.
+struct Batch<'t, 's, 'p> {
+    tree: &'t KdTree<'t>,
+    seq: &'s slcts::Slcts<'s>,
+    paths: &'p Paths<'p>,
+    rays: [Ray; LANES],
+    pixels: [(u32, u32); LANES],
+    nearest: [usize; LANES],
+    len: usize,
+}
+
+impl<'t, 's, 'p> Batch<'t, 's, 'p> {
+    fn new(tree: &'t KdTree<'t>, seq: &'s slcts::Slcts<'s>, paths: &'p Paths<'p>) -> Self {
+        Batch {
+            tree,
+            seq,
+            paths,
+            rays: [Ray::new(Vec3::ZERO, Vec3::X, 0.0, 0.0); LANES],
+            pixels: [(0, 0); LANES],
+            nearest: [0; LANES],
+            len: 0,
+        }
+    }
+
+    /// Adds pixel (x, y) with its ray and nearest corner; traces the batch
+    /// when it is full.
+    #[allow(clippy::too_many_arguments)]
+    fn push(
+        &mut self,
+        x: u32,
+        y: u32,
+        ray: Ray,
+        nearest: usize,
+        stack: &mut [KdStackItem],
+        stats: &mut TraceStats,
+        put: &mut impl FnMut(u32, u32, &Hit),
+    ) {
+        self.rays[self.len] = ray;
+        self.pixels[self.len] = (x, y);
+        self.nearest[self.len] = nearest;
+        self.len += 1;
+        if self.len == LANES {
+            self.flush(stack, stats, put);
+        }
+    }
+
+    /// Traces the pixels waiting and hands their hits to `put`.
+    fn flush(
+        &mut self,
+        stack: &mut [KdStackItem],
+        stats: &mut TraceStats,
+        put: &mut impl FnMut(u32, u32, &Hit),
+    ) {
+        let n = self.len;
+        let mut hits = [Hit::MISS; LANES];
+        window::trace(
+            self.tree,
+            self.seq,
+            self.paths,
+            &self.rays[..n],
+            &self.nearest[..n],
+            &mut hits[..n],
+            stack,
+            stats,
+        );
+        for (&(x, y), hit) in self.pixels[..n].iter().zip(&hits) {
+            put(x, y, hit);
+        }
+        self.len = 0;
+    }
 }
 
 /// What the cast keeps of a corner ray besides its history records.

@@ -11,7 +11,9 @@
 //! - [`image`]: hidden-surface removal by image casting (SLCTS-1D and -2D
 //!   undersampling windows, HLCTS-1D and -2D bisection; hierarchical and
 //!   rope traversal as references);
-//! - [`patch`]: patch-to-patch visibility through one HLCTS.
+//! - [`patch`]: patch-to-patch visibility through one HLCTS;
+//! - [`window`]: an SLCTS window's rays eight at a time, one test of a
+//!   primitive for all of them, together by ropes while they move alike.
 //!
 //! Every scheme is exact: each pixel gets the primitive and the `t` that
 //! hierarchical traversal gives it. A boundary ray whose history does not
@@ -25,6 +27,7 @@ pub mod image;
 pub mod layout;
 pub mod patch;
 pub mod slcts;
+pub mod window;
 
 pub use history::{History, HistoryRecord};
 pub use image::{
