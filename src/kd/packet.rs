@@ -160,14 +160,7 @@ impl Packet {
     /// empty interval (+inf, -inf) and are clear in the mask.
     #[inline(always)]
     pub(crate) fn segment(&self, b: &Aabb) -> (F8, F8, M8) {
-        let (mut tn, mut tf) = (self.t_min, self.t_max);
-        for a in 0..3 {
-            let lo = (F8::splat(b.min[a]) - self.o[a]) * self.inv[a];
-            let hi = (F8::splat(b.max[a]) - self.o[a]) * self.inv[a];
-            let order = lo.le(hi);
-            tn = tn.max(order.select(lo, hi));
-            tf = tf.min(order.select(hi, lo));
-        }
+        let (tn, tf) = self.clip(b, self.t_min, self.t_max);
         let mut valid = M8::NONE;
         for i in 0..LANES {
             valid.0[i] = if self.valid[i] { u32::MAX } else { 0 };
@@ -178,6 +171,20 @@ impl Packet {
             hit_box.select(tf, NEG_INF),
             hit_box,
         )
+    }
+
+    /// Each lane's interval `[t0, t1]` clipped to box `b` by the slab test
+    /// (`Aabb::clip_ray`'s arithmetic on finite 1/dir; NaN keeps a bound).
+    #[inline(always)]
+    fn clip(&self, b: &Aabb, mut t0: F8, mut t1: F8) -> (F8, F8) {
+        for a in 0..3 {
+            let lo = (F8::splat(b.min[a]) - self.o[a]) * self.inv[a];
+            let hi = (F8::splat(b.max[a]) - self.o[a]) * self.inv[a];
+            let order = lo.le(hi);
+            t0 = t0.max(order.select(lo, hi));
+            t1 = t1.min(order.select(hi, lo));
+        }
+        (t0, t1)
     }
 
     /// Where each lane leaves the leaf box of `rp`, and through which face:
@@ -388,14 +395,7 @@ fn cone_box(cone: &crate::Cone, w: Vec3, len: f32) -> crate::geom::Aabb {
 /// lane's finite 1/dir); NaN keeps a lane.
 #[inline(always)]
 fn near_box(p: &Packet, bx: crate::geom::Aabb, on: M8, t_max: F8) -> M8 {
-    let (mut t0, mut t1) = (p.t_min, t_max);
-    for a in 0..3 {
-        let lo = (F8::splat(bx.min[a]) - p.o[a]) * p.inv[a];
-        let hi = (F8::splat(bx.max[a]) - p.o[a]) * p.inv[a];
-        let order = lo.le(hi);
-        t0 = t0.max(order.select(lo, hi));
-        t1 = t1.min(order.select(hi, lo));
-    }
+    let (t0, t1) = p.clip(&bx, p.t_min, t_max);
     on & !t0.gt(t1)
 }
 
