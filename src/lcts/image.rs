@@ -439,15 +439,19 @@ fn count_window(st: &mut CastStats, seq: &slcts::Slcts) {
     st.windows_entered += (seq.leaves == 0 && seq.entry.is_some_and(|e| e.node != 0)) as u64;
 }
 
+/// Rays an SLCTS batch holds: a packet's worth, or one without the
+/// `packets` feature (the rays go alone then; no room is kept for eight).
+const BATCH: usize = if cfg!(feature = "packets") { LANES } else { 1 };
+
 /// Pixels of one SLCTS window waiting to be traced together
-/// ([`window::trace`]), up to a packet's worth.
+/// ([`window::trace`]), up to [`BATCH`].
 struct Batch<'t, 's, 'p> {
     tree: &'t KdTree<'t>,
     seq: &'s slcts::Slcts<'s>,
     paths: &'p Paths<'p>,
-    rays: [Ray; LANES],
-    pixels: [(u32, u32); LANES],
-    nearest: [usize; LANES],
+    rays: [Ray; BATCH],
+    pixels: [(u32, u32); BATCH],
+    nearest: [usize; BATCH],
     len: usize,
 }
 
@@ -457,9 +461,9 @@ impl<'t, 's, 'p> Batch<'t, 's, 'p> {
             tree,
             seq,
             paths,
-            rays: [Ray::new(Vec3::ZERO, Vec3::X, 0.0, 0.0); LANES],
-            pixels: [(0, 0); LANES],
-            nearest: [0; LANES],
+            rays: [Ray::new(Vec3::ZERO, Vec3::X, 0.0, 0.0); BATCH],
+            pixels: [(0, 0); BATCH],
+            nearest: [0; BATCH],
             len: 0,
         }
     }
@@ -481,7 +485,7 @@ impl<'t, 's, 'p> Batch<'t, 's, 'p> {
         self.pixels[self.len] = (x, y);
         self.nearest[self.len] = nearest;
         self.len += 1;
-        if self.len == LANES {
+        if self.len == BATCH {
             self.flush(stack, stats, put);
         }
     }
@@ -494,7 +498,7 @@ impl<'t, 's, 'p> Batch<'t, 's, 'p> {
         put: &mut impl FnMut(u32, u32, &Hit),
     ) {
         let n = self.len;
-        let mut hits = [Hit::MISS; LANES];
+        let mut hits = [Hit::MISS; BATCH];
         window::trace(
             self.tree,
             self.seq,

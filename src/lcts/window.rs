@@ -24,8 +24,9 @@ use crate::{Hit, Ray, TraceStats};
 /// Traces `rays` (at most [`LANES`], all inside the shaft of `s`) into
 /// `hits`, ray `i` with its nearest boundary ray `nearest[i]` as
 /// [`slcts::trace`] takes it. Rays that cannot share a packet (directions
-/// of different signs, a termination object, no common leaf) are traced
-/// one by one by [`slcts::trace`].
+/// of different signs, a termination object, no common leaf), and every
+/// ray in a build without the `packets` feature, are traced one by one by
+/// [`slcts::trace`].
 #[allow(clippy::too_many_arguments)]
 pub fn trace(
     tree: &KdTree,
@@ -43,7 +44,12 @@ pub fn trace(
     let curved = !(scene.spheres.is_empty() && scene.cones.is_empty());
     let mut p = Packet::EMPTY;
     // A termination object already answers most rays with one test.
-    let shared = n > 1 && s.termination.is_none() && s.len > 0 && p.load(rays, curved);
+    // Without the `packets` feature (small targets) every ray goes alone.
+    let shared = cfg!(feature = "packets")
+        && n > 1
+        && s.termination.is_none()
+        && s.len > 0
+        && p.load(rays, curved);
     if !shared || trace_packet(tree, s, paths, &p, rays, nearest, hits, stack, stats).is_none() {
         for i in 0..n {
             hits[i] = slcts::trace(tree, s, paths, nearest[i], &rays[i], stack, stats);
