@@ -21,7 +21,8 @@
 use super::guide::Paths;
 use super::history::{trace_recorded_on, History, HistoryRecord};
 use super::hlcts::{self, Boundary, HlctsEntry, Source, MAX_RAYS};
-use super::{slcts, window};
+use super::slcts;
+use super::window::{self, Shaft};
 use crate::geom::lanes::LANES;
 use crate::geom::{Camera, Hit};
 use crate::kd::{KdStackItem, KdTree, Traversal, KD_STACK_LEN};
@@ -369,7 +370,7 @@ pub fn cast_image_with(
                         count_window(&mut st, &seq);
                         let paths = seq.paths(&hs, &mut *path_buf);
                         let (x0, x1) = (corners(w, n, i), corners(w, n, i + 1));
-                        let mut batch = Batch::new(tree, &seq, &paths);
+                        let mut batch = Batch::new(tree, Shaft::Slcts(&seq), &paths);
                         for x in x0 + 1..x1 {
                             let nearest = far_half(x, x0, x1);
                             batch.push(x, yj, ray(x, yj), nearest, stack, &mut st.trace, &mut put);
@@ -399,7 +400,7 @@ pub fn cast_image_with(
                         // row and column of windows own their leading edges.
                         let y_from = if j == 1 { y_prev } else { y_prev + 1 };
                         let x_from = if i == 0 { x0 } else { x0 + 1 };
-                        let mut batch = Batch::new(tree, &seq, &paths);
+                        let mut batch = Batch::new(tree, Shaft::Slcts(&seq), &paths);
                         for y in y_from..=yj {
                             let corner_row = y == y_prev || y == yj;
                             for x in x_from..=x1 {
@@ -439,15 +440,15 @@ fn count_window(st: &mut CastStats, seq: &slcts::Slcts) {
     st.windows_entered += (seq.leaves == 0 && seq.entry.is_some_and(|e| e.node != 0)) as u64;
 }
 
-/// Rays an SLCTS batch holds: a packet's worth, or one without the
+/// Rays an LCTS batch holds: a packet's worth, or one without the
 /// `packets` feature (the rays go alone then; no room is kept for eight).
 const BATCH: usize = if cfg!(feature = "packets") { LANES } else { 1 };
 
-/// Pixels of one SLCTS window waiting to be traced together
+/// Pixels of one LCTS window waiting to be traced together
 /// ([`window::trace`]), up to [`BATCH`].
 struct Batch<'t, 's, 'p> {
     tree: &'t KdTree<'t>,
-    seq: &'s slcts::Slcts<'s>,
+    shaft: Shaft<'s, 's>,
     paths: &'p Paths<'p>,
     rays: [Ray; BATCH],
     pixels: [(u32, u32); BATCH],
@@ -456,10 +457,10 @@ struct Batch<'t, 's, 'p> {
 }
 
 impl<'t, 's, 'p> Batch<'t, 's, 'p> {
-    fn new(tree: &'t KdTree<'t>, seq: &'s slcts::Slcts<'s>, paths: &'p Paths<'p>) -> Self {
+    fn new(tree: &'t KdTree<'t>, shaft: Shaft<'s, 's>, paths: &'p Paths<'p>) -> Self {
         Batch {
             tree,
-            seq,
+            shaft,
             paths,
             rays: [Ray::new(Vec3::ZERO, Vec3::X, 0.0, 0.0); BATCH],
             pixels: [(0, 0); BATCH],
@@ -501,7 +502,7 @@ impl<'t, 's, 'p> Batch<'t, 's, 'p> {
         let mut hits = [Hit::MISS; BATCH];
         window::trace(
             self.tree,
-            self.seq,
+            self.shaft,
             self.paths,
             &self.rays[..n],
             &self.nearest[..n],
@@ -676,19 +677,21 @@ impl<F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, F> {
                 let hs = [corners[0].records, corners[1].records];
                 let buf = core::mem::take(&mut self.paths);
                 let paths = cut.paths(&hs, &mut *buf);
+                let mut batch = Batch::new(self.tree, Shaft::Hlcts(&cut), &paths);
                 for x in x0 + 1..x1 {
                     let nearest = far_half(x, x0, x1);
-                    let hit = hlcts::trace_guided(
-                        self.tree,
-                        &cut,
-                        &paths,
+                    let ray = self.ray(x, y0);
+                    batch.push(
+                        x,
+                        y0,
+                        ray,
                         nearest,
-                        &self.ray(x, y0),
                         self.stack,
                         &mut self.st.trace,
+                        self.put,
                     );
-                    (self.put)(x, y0, &hit);
                 }
+                batch.flush(self.stack, &mut self.st.trace, self.put);
                 self.paths = buf;
                 return;
             }
@@ -715,24 +718,18 @@ impl<F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, F> {
             let hs: [Option<&[HistoryRecord]>; 4] = core::array::from_fn(|j| corners[j].records);
             let buf = core::mem::take(&mut self.paths);
             let paths = cut.paths(&hs, &mut *buf);
+            let mut batch = Batch::new(self.tree, Shaft::Hlcts(&cut), &paths);
             for y in y0..=y1 {
                 for x in x0..=x1 {
                     if !corner(x, y) {
                         // Corners 0 and 1 on the top row, 2 and 3 below.
                         let nearest = far_half(x, x0, x1) + 2 * far_half(y, y0, y1);
-                        let hit = hlcts::trace_guided(
-                            self.tree,
-                            &cut,
-                            &paths,
-                            nearest,
-                            &self.ray(x, y),
-                            self.stack,
-                            &mut self.st.trace,
-                        );
-                        (self.put)(x, y, &hit);
+                        let ray = self.ray(x, y);
+                        batch.push(x, y, ray, nearest, self.stack, &mut self.st.trace, self.put);
                     }
                 }
             }
+            batch.flush(self.stack, &mut self.st.trace, self.put);
             self.paths = buf;
             return;
         }

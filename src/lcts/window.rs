@@ -1,12 +1,14 @@
-//! The rays of one SLCTS window traced together, eight at a time (the
+//! The rays of one LCTS window (an SLCTS window, or a small interval or
+//! rectangle of an HLCTS cast) traced together, eight at a time (the
 //! packet's lanes, `kd::packet`): each primitive of the shaft's
 //! common leaves is tested against all of them at once; past the common
 //! leaves the packet goes on by ropes while every ray still in it leaves
 //! its leaf through the same face into a leaf. Where the rays part (other
 //! faces, or a rope to an interior node), each goes on alone from that
-//! leaf, exactly as [`slcts::trace`] goes on from the last common leaf.
+//! leaf, exactly as [`slcts::trace`] and [`hlcts::trace_guided`] go on
+//! from the last common leaf.
 //!
-//! Every ray gets [`slcts::trace`]'s hit, and so the hierarchical one: each
+//! Every ray gets the single-ray trace's hit, and so the hierarchical one: each
 //! lane tests the same primitives of the same leaves in the same order
 //! with the single ray's arithmetic, keeps its best hit by the same rule,
 //! computes each leaf's exit as `KdTree::leaf_exit` does, and stops
@@ -14,6 +16,7 @@
 //! single rays count them.
 
 use super::guide::{self, Cursor, Paths};
+use super::hlcts::{self, Hlcts, ENTRY_EMPTY_RUN};
 use super::slcts::{self, Slcts, EMPTY_RUN};
 use crate::geom::lanes::{F8, LANES, M8};
 use crate::kd::packet::{ClosestLanes, Packet, PacketVisitor};
@@ -21,16 +24,54 @@ use crate::kd::traverse::{Closest, Steps};
 use crate::kd::{KdStackItem, KdTree, NO_NODE};
 use crate::{Hit, Ray, TraceStats};
 
-/// Traces `rays` (at most [`LANES`], all inside the shaft of `s`) into
-/// `hits`, ray `i` with its nearest boundary ray `nearest[i]` as
-/// [`slcts::trace`] takes it. Rays that cannot share a packet (directions
-/// of different signs, a termination object, no common leaf), and every
-/// ray in a build without the `packets` feature, are traced one by one by
-/// [`slcts::trace`].
+/// The shaft a window's rays share: an SLCTS sequence or an HLCTS cut
+/// (whose leading leaves are its common sequence).
+#[derive(Clone, Copy)]
+pub enum Shaft<'a, 'b> {
+    /// A window of an SLCTS cast.
+    Slcts(&'a Slcts<'b>),
+    /// A small interval or rectangle of an HLCTS cast.
+    Hlcts(&'a Hlcts<'b>),
+}
+
+impl Shaft<'_, '_> {
+    /// Whether the rays can share a packet: no termination object (it
+    /// already answers most rays with one test) and some common leaf.
+    fn shared(&self) -> bool {
+        match self {
+            Shaft::Slcts(s) => s.termination.is_none() && s.len > 0,
+            Shaft::Hlcts(h) => h.termination.is_none() && h.leading_leaves > 0,
+        }
+    }
+
+    /// One ray alone, as the cast traces it without packets.
+    #[allow(clippy::too_many_arguments)]
+    fn single(
+        &self,
+        tree: &KdTree,
+        paths: &Paths,
+        nearest: usize,
+        ray: &Ray,
+        stack: &mut [KdStackItem],
+        stats: &mut TraceStats,
+    ) -> Hit {
+        match self {
+            Shaft::Slcts(s) => slcts::trace(tree, s, paths, nearest, ray, stack, stats),
+            Shaft::Hlcts(h) => hlcts::trace_guided(tree, h, paths, nearest, ray, stack, stats),
+        }
+    }
+}
+
+/// Traces `rays` (at most [`LANES`], all inside `shaft`) into `hits`, ray
+/// `i` with its nearest boundary ray `nearest[i]` as the single-ray trace
+/// ([`slcts::trace`], [`hlcts::trace_guided`]) takes it. Rays that cannot
+/// share a packet (directions of different signs, a termination object,
+/// no common leaf), and every ray in a build without the `packets`
+/// feature, are traced one by one by that single-ray trace.
 #[allow(clippy::too_many_arguments)]
 pub fn trace(
     tree: &KdTree,
-    s: &Slcts,
+    shaft: Shaft,
     paths: &Paths,
     rays: &[Ray],
     nearest: &[usize],
@@ -43,16 +84,27 @@ pub fn trace(
     let scene = &tree.scene;
     let curved = !(scene.spheres.is_empty() && scene.cones.is_empty());
     let mut p = Packet::EMPTY;
-    // A termination object already answers most rays with one test.
     // Without the `packets` feature (small targets) every ray goes alone.
-    let shared = cfg!(feature = "packets")
-        && n > 1
-        && s.termination.is_none()
-        && s.len > 0
-        && p.load(rays, curved);
-    if !shared || trace_packet(tree, s, paths, &p, rays, nearest, hits, stack, stats).is_none() {
+    let shared = cfg!(feature = "packets") && n > 1 && shaft.shared() && p.load(rays, curved);
+    let packed = shared
+        && match shaft {
+            Shaft::Slcts(s) => {
+                let leaves = s.entries[..s.len]
+                    .iter()
+                    .map(|&e| (e & !EMPTY_RUN, e & EMPTY_RUN != 0));
+                trace_packet(tree, leaves, paths, &p, rays, nearest, hits, stack, stats)
+            }
+            Shaft::Hlcts(h) => {
+                let leaves = h.entries[..h.leading_leaves]
+                    .iter()
+                    .map(|e| (e.node, e.flags & ENTRY_EMPTY_RUN != 0));
+                trace_packet(tree, leaves, paths, &p, rays, nearest, hits, stack, stats)
+            }
+        }
+        .is_some();
+    if !packed {
         for i in 0..n {
-            hits[i] = slcts::trace(tree, s, paths, nearest[i], &rays[i], stack, stats);
+            hits[i] = shaft.single(tree, paths, nearest[i], &rays[i], stack, stats);
         }
     }
 }
@@ -63,7 +115,7 @@ pub fn trace(
 #[allow(clippy::too_many_arguments)]
 fn trace_packet(
     tree: &KdTree,
-    s: &Slcts,
+    leaves: impl Iterator<Item = (u32, bool)>,
     paths: &Paths,
     p: &Packet,
     rays: &[Ray],
@@ -90,10 +142,10 @@ fn trace_packet(
     // is one step and no test.
     let mut leaf = 0;
     let mut exits = None;
-    for &e in &s.entries[..s.len] {
-        leaf = e & !EMPTY_RUN;
+    for (node, run) in leaves {
+        leaf = node;
         exits = None;
-        if e & EMPTY_RUN != 0 {
+        if run {
             let lanes = on.count() as u64;
             steps.leaves += lanes;
             steps.empty += lanes;
