@@ -12,7 +12,7 @@
 //!   undersampling windows, HLCTS-1D and -2D bisection; hierarchical and
 //!   rope traversal as references);
 //! - [`patch`]: patch-to-patch visibility through one HLCTS;
-//! - [`window`]: an SLCTS window's rays eight at a time, one test of a
+//! - [`window`]: an LCTS window's rays eight at a time, one test of a
 //!   primitive for all of them, together by ropes while they move alike.
 //!
 //! Every scheme is exact: each pixel gets the primitive and the `t` that
