@@ -169,6 +169,36 @@ fn huge_and_tiny_coordinates() {
 /// A grid of axis-aligned quads on integer planes: the SAH puts split
 /// planes exactly there, and axis-parallel rays on integer coordinates lie
 /// in those planes or cross them at shared edges.
+/// Rays along the axes through the corners of the primitives' boxes: they
+/// lie in the split planes the build takes from those corners, where the
+/// walk visits both sides over the same segment. A hit inside a leaf on
+/// the first side must not end the walk before the second side is seen
+/// (it did: seed 31's ray through a triangle's vertex got a farther hit).
+#[test]
+fn rays_in_split_planes_through_vertices() {
+    for seed in [31, 32, 33] {
+        let mut rng = Rng(seed);
+        let o = random_scene(&mut rng, 900, 200, 200, 10.0);
+        let scene = o.scene();
+        let mut rays = Vec::new();
+        for p in 0..scene.prim_count() {
+            let Some(b) = scene.prim_bounds(p) else {
+                continue;
+            };
+            for axis in 0..3 {
+                let mut d = Vec3::ZERO;
+                d[axis] = 1.0;
+                for corner in [b.min, b.max] {
+                    let mut from = corner;
+                    from[axis] = -40.0;
+                    rays.push(Ray::new(from, d, 0.0, f32::INFINITY));
+                }
+            }
+        }
+        assert!(check_scene(&o, &rays, &format!("seed {seed}")) > 1000);
+    }
+}
+
 #[test]
 fn axis_parallel_rays_on_split_planes() {
     let mut o = OwnedScene::default();

@@ -390,6 +390,10 @@ impl<'a> KdTree<'a> {
         let mut budget = budget0;
         // Leaf visits that spent from the budget.
         let mut leaf_visits = 0usize;
+        // Segments lying in a split plane whose right side still waits: it
+        // covers the same stretch of the ray as the left side being
+        // walked, so a hit inside a left leaf is not the nearest yet.
+        let mut in_plane = 0usize;
         let stopped = 'walk: loop {
             let mut nd = self.node(node);
             while !nd.is_leaf() {
@@ -448,6 +452,7 @@ impl<'a> KdTree<'a> {
                             t: ex_t,
                         };
                         ex += 2;
+                        in_plane += 1;
                         node = left;
                     } else {
                         rec.interior(node, both);
@@ -470,7 +475,13 @@ impl<'a> KdTree<'a> {
             budget -= 1;
             leaf_visits += 1;
             steps.empty += refs.is_empty() as u64;
-            if v.visit(&self.scene, refs, ex_t) {
+            // No hit is final while a right side of the same segment waits.
+            let exit = if in_plane == 0 {
+                ex_t
+            } else {
+                f32::NEG_INFINITY
+            };
+            if v.visit(&self.scene, refs, exit) {
                 // What is still on the stack was pushed and never visited.
                 for e in stack[1..=ex].iter().rev() {
                     if e.node != SKIP {
@@ -492,6 +503,9 @@ impl<'a> KdTree<'a> {
                     ex_t = stack[ex].t;
                     break;
                 }
+                // The left side of an in-plane segment is done; its right
+                // side comes off next.
+                in_plane = in_plane.saturating_sub(1);
             }
         };
         steps.interior += (budget0 - budget - leaf_visits) as u64;
