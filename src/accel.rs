@@ -7,6 +7,7 @@
 use crate::bvh::{Bvh, BvhStackItem};
 use crate::kd::{KdStackItem, KdTree, Traversal, KD_STACK_LEN};
 use crate::proj::{ProjHierarchy, ProjScheme};
+use crate::wide::{WideBvh, WideStackItem};
 use crate::{Error, Hit, Ray, TraceStats};
 
 /// What `validate` found: the structure's shape.
@@ -255,6 +256,44 @@ impl Accel for Bvh<'_> {
     /// [`crate::bvh::validate_rtree`] for those).
     fn validate(&self, stack: &mut [BvhStackItem]) -> Result<Shape, Error> {
         Bvh::validate(self, None, stack).map(bvh_shape)
+    }
+}
+
+impl Accel for WideBvh<'_> {
+    type Method = ();
+    type StackItem = WideStackItem;
+
+    fn stack_len(&self) -> usize {
+        WideBvh::stack_len(self)
+    }
+
+    #[inline]
+    fn intersect(
+        &self,
+        ray: &Ray,
+        _: (),
+        stack: &mut [WideStackItem],
+        stats: &mut TraceStats,
+    ) -> Result<Hit, Error> {
+        stack_ok(stack.len(), WideBvh::stack_len(self))?;
+        Ok(WideBvh::intersect(self, ray, stack, stats))
+    }
+
+    #[inline]
+    fn occluded(
+        &self,
+        ray: &Ray,
+        _: (),
+        stack: &mut [WideStackItem],
+        stats: &mut TraceStats,
+    ) -> Result<bool, Error> {
+        stack_ok(stack.len(), WideBvh::stack_len(self))?;
+        Ok(WideBvh::occluded(self, ray, stack, stats))
+    }
+
+    /// [`WideBvh::validate`] (one pass over the nodes: no stack needed).
+    fn validate(&self, _: &mut [WideStackItem]) -> Result<Shape, Error> {
+        WideBvh::validate(self)
     }
 }
 

@@ -39,6 +39,7 @@ pub mod rng;
 mod sort_key;
 pub mod stats;
 pub mod tolerance;
+pub mod wide;
 
 pub use accel::{Accel, Shape};
 pub use error::Error;

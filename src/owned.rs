@@ -11,6 +11,7 @@ use crate::kd::{self, KdEvent, KdInfo, KdNode, KdParams, KdRequirements, KdRopes
 use crate::lcts::hlcts::HlctsEntry;
 use crate::lcts::{CornerInfo, HistoryRecord, ImageRequirements, ImageScratch};
 use crate::proj::{self, Criteria, ProjBuilder, ProjHierarchy, ProjPlane, Rect};
+use crate::wide::{self, WideBvh, WideInfo, WideNode};
 use crate::{Aabb, Error, Scene};
 use alloc::vec;
 use alloc::vec::Vec;
@@ -267,6 +268,86 @@ impl OwnedBvh {
     /// An R-tree's state (free lists, counts, digest), to corrupt in tests.
     pub fn rtree_state_mut(&mut self) -> &mut bvh::RTreeState {
         &mut self.rtree
+    }
+}
+
+/// A wide hierarchy's parts and its build scratch.
+pub struct OwnedWide {
+    nodes: Vec<WideNode>,
+    refs: Vec<u32>,
+    bvh_nodes: Vec<BvhNode>,
+    boxes: Vec<Aabb>,
+    keys: Vec<f32>,
+    links: Vec<u32>,
+    info: WideInfo,
+}
+
+impl OwnedWide {
+    /// Room for a wide hierarchy over `prim_count` primitives.
+    pub fn with_room(prim_count: usize) -> OwnedWide {
+        let r = wide::requirements(prim_count);
+        OwnedWide {
+            nodes: vec![WideNode::default(); r.nodes],
+            refs: vec![0; r.refs],
+            bvh_nodes: vec![BvhNode::default(); r.bvh_nodes],
+            boxes: vec![Aabb::EMPTY; r.boxes],
+            keys: vec![0.0; r.keys],
+            links: vec![0; r.links],
+            info: WideInfo::default(),
+        }
+    }
+
+    /// Builds into this room with leaves of at most `leaf_size`; the
+    /// scratch is freed afterwards.
+    pub fn build(&mut self, scene: &Scene, leaf_size: u32) -> Result<(), Error> {
+        let t = wide::build(
+            scene,
+            leaf_size,
+            wide::WideStorage {
+                nodes: &mut self.nodes,
+                refs: &mut self.refs,
+            },
+            wide::WideScratch {
+                bvh_nodes: &mut self.bvh_nodes,
+                boxes: &mut self.boxes,
+                keys: &mut self.keys,
+                links: &mut self.links,
+            },
+        )?;
+        self.info = *t.info();
+        self.bvh_nodes = Vec::new();
+        self.boxes = Vec::new();
+        self.keys = Vec::new();
+        self.links = Vec::new();
+        Ok(())
+    }
+
+    /// A wide hierarchy over `scene` with leaves of at most `leaf_size`.
+    pub fn new(scene: &Scene, leaf_size: u32) -> Result<OwnedWide, Error> {
+        let mut o = OwnedWide::with_room(scene.prim_count());
+        o.build(scene, leaf_size)?;
+        Ok(o)
+    }
+
+    /// The built hierarchy over `scene` (the scene it was built on).
+    pub fn view<'a>(&'a self, scene: Scene<'a>) -> Result<WideBvh<'a>, Error> {
+        WideBvh::from_parts(scene, &self.nodes, &self.refs, self.info)
+    }
+
+    /// What the build made.
+    pub fn info(&self) -> &WideInfo {
+        &self.info
+    }
+
+    /// Bytes of the nodes in use and the references.
+    pub fn bytes(&self) -> usize {
+        self.info.node_count as usize * core::mem::size_of::<WideNode>()
+            + self.info.ref_count as usize * 4
+    }
+
+    /// The parts, to corrupt in tests.
+    pub fn parts_mut(&mut self) -> (&mut [WideNode], &mut [u32], &mut WideInfo) {
+        (&mut self.nodes, &mut self.refs, &mut self.info)
     }
 }
 

@@ -9,8 +9,11 @@ mod common;
 use common::*;
 use coray::bvh::{Builder, Bvh, BvhInfo, BvhNode, BvhStackItem, RTreeParams};
 use coray::kd::{KdNode, KdParams, KdTree, Traversal, NO_NODE};
-use coray::owned::{stack, BvhBuild, OwnedBvh, OwnedCast, OwnedKd, OwnedPatch, OwnedProj};
+use coray::owned::{
+    stack, BvhBuild, OwnedBvh, OwnedCast, OwnedKd, OwnedPatch, OwnedProj, OwnedWide,
+};
 use coray::proj::{Criteria, ProjBuilder, ProjPlane, ProjScheme};
+use coray::wide::WideStackItem;
 use coray::{Accel, Camera, Hit, Ray, TraceStats, Vec3};
 use std::sync::mpsc;
 use std::time::Duration;
@@ -634,4 +637,121 @@ fn rtree_state_must_agree_with_its_hierarchy() {
             assert!(o.validate(sc).is_err(), "{what}: accepted");
         }
     }
+}
+
+/// Everything a wide hierarchy serves on `o`: closest and any hit.
+/// Returns the hits and whether a trace faulted.
+fn exercise_wide(o: &OwnedWide, s: &OwnedScene, rays: &[Ray]) -> (Vec<Hit>, bool) {
+    let sc = s.scene();
+    let mut st = TraceStats::default();
+    let mut hits = Vec::new();
+    if let Ok(w) = o.view(sc) {
+        let mut stk = stack::<WideStackItem>(w.stack_len().min(1 << 16));
+        for r in rays {
+            hits.push(w.intersect(r, &mut stk, &mut st));
+            w.occluded(r, &mut stk, &mut st);
+        }
+    }
+    (hits, st.faults > 0)
+}
+
+/// Corrupts a copy of the wide hierarchy of `s` (leaves of 1 and of 3) by
+/// `corrupt`; a copy `validate` accepts traces as the clean one, without
+/// faults. Returns whether validate accepted it.
+fn wide_cases(s: &OwnedScene, rays: &[Ray], what: &str, corrupt: impl Fn(&mut OwnedWide)) -> usize {
+    let sc = s.scene();
+    let mut accepted = 0;
+    for leaf in [1, 3] {
+        let clean = OwnedWide::new(&sc, leaf).unwrap();
+        let mut bad = OwnedWide::new(&sc, leaf).unwrap();
+        corrupt(&mut bad);
+        let want = exercise_wide(&clean, s, rays).0;
+        let ok = bad.view(sc).is_ok_and(|w| w.validate().is_ok());
+        let (got, faulted) = exercise_wide(&bad, s, rays);
+        if ok {
+            accepted += 1;
+            assert!(!faulted, "{what} leaf {leaf}: validated, then faulted");
+            let diff = got.iter().zip(&want).filter(|(a, b)| !same(a, b)).count();
+            assert_eq!(
+                diff, 0,
+                "{what} leaf {leaf}: validated, then {diff} different hits"
+            );
+        }
+    }
+    accepted
+}
+
+/// Seeded sweep over every field of the wide hierarchy: node boxes, child
+/// indices, counts, references and the info. Nothing panics or hangs; what
+/// validate accepts traces as the clean build.
+#[test]
+fn wide_random_words() {
+    watchdog(120, "wide random words", || {
+        let s = scene(6);
+        let rays = rays();
+        let mut rng = Rng(14);
+        let mut accepted = 0;
+        for _ in 0..300 {
+            let (part, pick, value) = (rng.below(4), rng.next_u64(), rng.next_u64() as u32);
+            let small = rng.below(40) as u32;
+            accepted += wide_cases(&s, &rays, "random word", |w| {
+                let (nodes, refs, info) = w.parts_mut();
+                let slot = (pick >> 20) as usize % 4;
+                match part {
+                    0 => {
+                        let nd = &mut nodes[(pick % info.node_count as u64) as usize];
+                        match pick >> 40 & 7 {
+                            0 => nd.child[slot] = small,
+                            1 => nd.child[slot] = value,
+                            2 => nd.child[slot] ^= 1 << 31,
+                            3 => nd.count[slot] = small,
+                            4 => nd.count[slot] = value,
+                            5 => nd.min[slot % 3][slot] = f32::from_bits(value),
+                            6 => nd.max[slot % 3][slot] = f32::from_bits(value),
+                            _ => nd.child[slot] = coray::wide::EMPTY_SLOT,
+                        }
+                    }
+                    1 => refs[(pick % refs.len().max(1) as u64) as usize] = small,
+                    2 => refs[(pick % refs.len().max(1) as u64) as usize] = value,
+                    _ => match pick >> 40 & 3 {
+                        0 => info.depth = value % 64,
+                        1 => info.node_count = value % (2 * info.node_count + 2),
+                        2 => info.ref_count = value % (2 * info.ref_count + 2),
+                        _ => info.leaf_count = small,
+                    },
+                }
+            });
+        }
+        // A few corruptions leave values as they were; the rest are refused.
+        assert!(accepted < 60, "{accepted} of 600 corruptions accepted");
+    });
+}
+
+/// A child index pointing back up (a cycle) and a leaf naming a primitive
+/// past the scene: validate refuses both, traversal returns.
+#[test]
+fn wide_cycle_and_reference_past_the_scene() {
+    watchdog(30, "wide cycle", || {
+        let s = scene(4);
+        let n = s.scene().prim_count() as u32;
+        assert_eq!(
+            wide_cases(&s, &rays(), "cycle", |w| {
+                let (nodes, _, info) = w.parts_mut();
+                let last = info.node_count as usize - 1;
+                let slot = nodes[last].child.iter().position(|&c| c & (1 << 31) == 0);
+                nodes[last].child[slot.unwrap_or(0)] = 0;
+                nodes[last].count[slot.unwrap_or(0)] = 0;
+            }),
+            0
+        );
+        for bad in [n, n + 2, u32::MAX] {
+            assert_eq!(
+                wide_cases(&s, &rays(), "reference past the scene", |w| {
+                    let (_, refs, _) = w.parts_mut();
+                    refs[0] = bad;
+                }),
+                0
+            );
+        }
+    });
 }

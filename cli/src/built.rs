@@ -7,7 +7,7 @@ use crate::method::{Method, Preset};
 use crate::projrig::ProjRig;
 use crate::shoot::{AccelShooter, Shooter};
 use coray::kd::Traversal;
-use coray::owned::{OwnedBvh, OwnedKd};
+use coray::owned::{OwnedBvh, OwnedKd, OwnedWide};
 use coray::{Aabb, Scene};
 use coray_scenes::SceneMesh;
 use std::time::Instant;
@@ -16,6 +16,7 @@ enum Inner<'s> {
     Kd(OwnedKd, Traversal),
     KdC(coray_ffi::through_c::CKdTree<'s>, bool),
     Bvh(OwnedBvh),
+    Wide(OwnedWide),
     Proj(Box<ProjRig<'s>>),
     #[cfg(feature = "embree")]
     Embree(coray_embree::EmbreeScene, bool),
@@ -121,6 +122,14 @@ impl<'s> Built<'s> {
                 b.bytes = Some(o.bytes());
                 b.inner = Inner::Bvh(o);
             }
+            Method::Wide { leaf_size } => {
+                let mut o = OwnedWide::with_room(scene.prim_count());
+                let t = Instant::now();
+                o.build(&scene, leaf_size).map_err(err)?;
+                b.build_ms = ms(t);
+                b.bytes = Some(o.bytes());
+                b.inner = Inner::Wide(o);
+            }
             Method::Proj(m) => {
                 let rig = ProjRig::for_mesh(mesh, m)?;
                 b.build_ms = rig.view_ms + rig.light_ms + rig.global_ms;
@@ -160,6 +169,11 @@ impl<'s> Built<'s> {
                 bounds: self.bounds,
             }),
             Inner::Bvh(o) => v.visit(&AccelShooter {
+                accel: o.view(self.scene).expect("just built"),
+                method: (),
+                bounds: self.bounds,
+            }),
+            Inner::Wide(o) => v.visit(&AccelShooter {
                 accel: o.view(self.scene).expect("just built"),
                 method: (),
                 bounds: self.bounds,

@@ -44,6 +44,10 @@ impl Preset {
     }
 }
 
+/// Leaf size of the `wide` method: two primitives a leaf entry measured
+/// fastest on incoherent rays (bench's speed table, SPD scenes).
+pub const WIDE_LEAF_SIZE: u32 = 2;
+
 /// The hierarchy builders by name.
 pub const BVH_NAMES: [(&str, BvhBuild); 7] = [
     ("tdbs", BvhBuild::Static(Builder::Tdbs, 1)),
@@ -117,6 +121,11 @@ pub enum Method {
         /// How it is built.
         build: BvhBuild,
     },
+    /// The wide (4-ary) hierarchy collapsed from the binary SAH one.
+    Wide {
+        /// Most primitives per leaf entry.
+        leaf_size: u32,
+    },
     /// Projection hierarchies (camera, light planes) and a global 3D one.
     Proj(ProjMethod),
     /// Intel Embree 3, the reference (needs feature `embree`).
@@ -138,6 +147,7 @@ impl Method {
                 .iter()
                 .map(|&(name, build)| Method::Bvh { name, build }),
         );
+        v.push(Method::wide());
         if cfg!(feature = "embree") {
             v.push(Method::Embree(EmbreeCall::One));
             v.push(Method::Embree(EmbreeCall::Eight));
@@ -150,6 +160,13 @@ impl Method {
         Method::Kd {
             preset: None,
             traversal,
+        }
+    }
+
+    /// The wide hierarchy with its default leaves.
+    pub fn wide() -> Method {
+        Method::Wide {
+            leaf_size: WIDE_LEAF_SIZE,
         }
     }
 
@@ -240,6 +257,7 @@ impl Method {
             "slcts2d" => return cast(Scheme::Slcts2d { n: 5, m: 5 }),
             "hlcts1d" => return cast(Scheme::Hlcts1d),
             "hlcts2d" => return cast(Scheme::Hlcts2d),
+            "wide" => return Some(Method::wide()),
             "embree" => return Some(Method::Embree(EmbreeCall::One)),
             "embree8" => return Some(Method::Embree(EmbreeCall::Eight)),
             _ => {}
@@ -338,6 +356,7 @@ impl fmt::Display for Method {
                 Scheme::Ropes => f.write_str("cast-ropes"),
             },
             Method::Bvh { name, .. } => f.write_str(name),
+            Method::Wide { .. } => f.write_str("wide"),
             Method::Proj(p) => {
                 let c = match p.criteria {
                     Criteria::TwoD => "2d",

@@ -22,7 +22,15 @@ pub const INCOHERENT_RAYS: usize = 1_000_000;
 
 /// The coray methods traced ray by ray on every set; `kd-c` and `kd-c1`
 /// are `kd` through the C ABI (array calls, one call per ray).
-pub const RAY_METHODS: [&str; 6] = ["kd", "kd-rope", "kd-packet", "tdbs-sah", "kd-c", "kd-c1"];
+pub const RAY_METHODS: [&str; 7] = [
+    "kd",
+    "kd-rope",
+    "kd-packet",
+    "tdbs-sah",
+    "wide",
+    "kd-c",
+    "kd-c1",
+];
 
 /// The image casts timed on the primary set (one thread: a cast is one
 /// call over the camera's image).

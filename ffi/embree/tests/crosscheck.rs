@@ -1,11 +1,12 @@
-//! The Embree cross-check from Rust: the same scene in coray (both presets,
-//! both traversals) and in Embree through coray-embree; camera, random and
+//! The Embree cross-check from Rust: the same scene in coray (both kd presets,
+//! both traversals; the wide hierarchy) and in Embree through coray-embree; camera, random and
 //! surface rays with unit directions. Same hit or miss, same primitive,
 //! |dt| <= 1e-4 max(1, t), except documented ties (same distance; grazing an
 //! edge, silhouette or rim), which are counted and printed.
 use coray::kd::{KdParams, Traversal, KD_STACK_LEN};
-use coray::owned::{stack, OwnedKd};
+use coray::owned::{stack, OwnedKd, OwnedWide};
 use coray::rng::SplitMix64;
+use coray::wide::WideStackItem;
 use coray::{Camera, Cone, Hit, Ray, Scene, Sphere, TraceStats, Vec3};
 use coray_embree::{classify, grazing, Agreement, EmbreeScene};
 
@@ -152,6 +153,46 @@ fn coray_matches_embree_on_a_million_rays() {
             assert_eq!(bad, 0);
             assert_eq!(bad_any, 0);
         }
+    }
+
+    // The wide hierarchy: the same primitive tests, so the same rules.
+    for leaf in [1, 2] {
+        let owned = OwnedWide::new(&scene, leaf).unwrap();
+        let w = owned.view(scene).unwrap();
+        w.validate().unwrap();
+        let (mut hits, mut same_t, mut graze, mut bad, mut bad_any) = (0, 0, 0, 0, 0);
+        let mut st = TraceStats::default();
+        let mut stk = stack::<WideStackItem>(w.stack_len());
+        for (i, r) in rays.iter().enumerate() {
+            let a = w.intersect(r, &mut stk, &mut st);
+            let b = &reference[i];
+            hits += a.is_hit() as usize;
+            let any = w.occluded(r, &mut stk, &mut st);
+            assert_eq!(any, a.is_hit(), "occluded and intersect disagree in coray");
+            if any != reference_any[i] && !(grazing(r, &a) || grazing(r, b)) {
+                bad_any += 1;
+            }
+            match classify(r, &a, b) {
+                Agreement::Same => {}
+                Agreement::TieSameDistance => same_t += 1,
+                Agreement::TieGrazing => graze += 1,
+                Agreement::Mismatch => {
+                    bad += 1;
+                    if bad <= 10 {
+                        println!("wide leaf {leaf} disagreement on ray {i} {r:?}: coray {a:?}, embree {b:?}");
+                    }
+                }
+            }
+        }
+        println!(
+            "wide leaf {leaf}: {} rays, {hits} hits, {same_t} same-distance ties, {graze} grazing ties, \
+             {bad} disagreements, {bad_any} any-hit disagreements",
+            rays.len()
+        );
+        assert_eq!(st.faults, 0);
+        assert!(hits > rays.len() / 4);
+        assert_eq!(bad, 0);
+        assert_eq!(bad_any, 0);
     }
 }
 

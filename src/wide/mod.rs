@@ -1,0 +1,223 @@
+//! Wide bounding volume hierarchies: [`WIDTH`] (4) children a node, their
+//! boxes stored axis by axis, so a ray tests all four in one pass of
+//! vector instructions and descends a tree a quarter as deep as a binary
+//! one. This is the structure for incoherent rays (secondary bounces,
+//! rays from anywhere in any direction), where a kd-tree's long chain of
+//! dependent one-plane steps costs most: the same primitive tests and tie
+//! rule give the kd-tree's hits bit for bit.
+//!
+//! Built in two steps in the caller's memory: the binary SAH hierarchy
+//! ([`crate::bvh::Builder::TdbsSah`]) into scratch, then collapsed
+//! ([`build`]) into breadth-first wide nodes over the same references.
+//! The caller owns the traversal stack ([`WideBvh::stack_len`]).
+
+mod build;
+mod node;
+mod traverse;
+mod validate;
+
+pub use node::{WideNode, EMPTY_SLOT, LEAF_BIT, WIDTH};
+pub use traverse::WideStackItem;
+
+use crate::bvh::{self, BvhNode, BvhScratch, BvhStorage};
+use crate::geom::{Aabb, Scene};
+use crate::Error;
+
+/// Element counts of the slices a build needs. `nodes` and `refs` are the
+/// hierarchy's; the rest is scratch, free once the build returns.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct WideRequirements {
+    /// [`WideNode`] slots: one per interior node of the binary hierarchy
+    /// at most.
+    pub nodes: usize,
+    /// Primitive references (`u32`), one per primitive.
+    pub refs: usize,
+    /// Scratch: the binary hierarchy's [`BvhNode`]s.
+    pub bvh_nodes: usize,
+    /// Scratch: primitive boxes.
+    pub boxes: usize,
+    /// Scratch: `f32` keys of the binary build's sweep.
+    pub keys: usize,
+    /// Scratch: `u32` links of the binary build.
+    pub links: usize,
+}
+
+/// Room for a wide hierarchy over `prim_count` primitives.
+pub fn requirements(prim_count: usize) -> WideRequirements {
+    let b = bvh::requirements(prim_count, bvh::Builder::TdbsSah);
+    WideRequirements {
+        nodes: prim_count.saturating_sub(1).max(1),
+        refs: b.refs,
+        bvh_nodes: b.nodes,
+        boxes: b.boxes,
+        keys: b.keys,
+        links: b.links,
+    }
+}
+
+/// The hierarchy's own slices (kept).
+pub struct WideStorage<'a> {
+    /// At least [`WideRequirements::nodes`].
+    pub nodes: &'a mut [WideNode],
+    /// At least [`WideRequirements::refs`].
+    pub refs: &'a mut [u32],
+}
+
+/// Build scratch; free to reuse once the build returns.
+pub struct WideScratch<'a> {
+    /// At least [`WideRequirements::bvh_nodes`].
+    pub bvh_nodes: &'a mut [BvhNode],
+    /// At least [`WideRequirements::boxes`].
+    pub boxes: &'a mut [Aabb],
+    /// At least [`WideRequirements::keys`].
+    pub keys: &'a mut [f32],
+    /// At least [`WideRequirements::links`].
+    pub links: &'a mut [u32],
+}
+
+/// Shape of a built wide hierarchy: what an arena header records.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[repr(C)]
+pub struct WideInfo {
+    /// Nodes in use; node 0 is the root.
+    pub node_count: u32,
+    /// Leaf entries (runs of references) in the nodes.
+    pub leaf_count: u32,
+    /// References in leaves (each primitive once).
+    pub ref_count: u32,
+    /// Level of the deepest node (the root alone: 0).
+    pub depth: u32,
+    /// Most references in one leaf entry (the build's leaf size).
+    pub leaf_size: u32,
+    /// [`crate::rng::ref_digest`] of the references in leaves, low and high words.
+    pub ref_digest: [u32; 2],
+}
+
+impl WideInfo {
+    /// The recorded reference digest.
+    pub fn ref_digest(&self) -> u64 {
+        self.ref_digest[0] as u64 | (self.ref_digest[1] as u64) << 32
+    }
+}
+
+/// A built wide hierarchy over a scene, borrowing the caller's memory.
+/// Made only by [`build`] and [`WideBvh::from_parts`].
+#[derive(Clone, Copy)]
+pub struct WideBvh<'a> {
+    pub(crate) scene: Scene<'a>,
+    pub(crate) nodes: &'a [WideNode],
+    pub(crate) refs: &'a [u32],
+    pub(crate) info: WideInfo,
+}
+
+/// Builds the binary SAH hierarchy with leaves of at most `leaf_size`
+/// (1 or more) primitives into `scratch`, then collapses it into
+/// `storage`. Fails for bad input or parameters and for slices shorter
+/// than [`requirements`].
+pub fn build<'a>(
+    scene: &Scene<'a>,
+    leaf_size: u32,
+    storage: WideStorage<'a>,
+    scratch: WideScratch,
+) -> Result<WideBvh<'a>, Error> {
+    let req = requirements(scene.prim_count());
+    if storage.nodes.len() < req.nodes {
+        return Err(Error::SliceTooSmall {
+            slice: "nodes",
+            needed: req.nodes,
+            got: storage.nodes.len(),
+        });
+    }
+    let WideStorage { nodes, refs } = storage;
+    let (collapsed, binary) = {
+        let b = bvh::build(
+            scene,
+            bvh::Builder::TdbsSah,
+            leaf_size,
+            BvhStorage {
+                nodes: scratch.bvh_nodes,
+                refs: &mut *refs,
+            },
+            BvhScratch {
+                boxes: scratch.boxes,
+                keys: scratch.keys,
+                links: scratch.links,
+                clusters: &mut [],
+            },
+        )?;
+        (build::collapse(&b, nodes)?, *b.info())
+    };
+    let info = WideInfo {
+        node_count: collapsed.nodes as u32,
+        leaf_count: collapsed.leaves as u32,
+        ref_count: binary.ref_count,
+        depth: collapsed.depth,
+        leaf_size,
+        ref_digest: binary.ref_digest,
+    };
+    Ok(WideBvh {
+        scene: *scene,
+        nodes: &nodes[..collapsed.nodes],
+        refs: &refs[..binary.ref_count as usize],
+        info,
+    })
+}
+
+impl<'a> WideBvh<'a> {
+    /// Reassembles a hierarchy from parts read back from memory, with O(1)
+    /// checks (counts within the slices). Run [`WideBvh::validate`] on
+    /// parts from untrusted storage: until it accepts them, traversal never
+    /// panics or hangs on them, but may stop early with
+    /// [`crate::TraceStats::faults`] counted.
+    pub fn from_parts(
+        scene: Scene<'a>,
+        nodes: &'a [WideNode],
+        refs: &'a [u32],
+        info: WideInfo,
+    ) -> Result<WideBvh<'a>, Error> {
+        let i = &info;
+        if i.node_count == 0
+            || i.node_count as usize > nodes.len()
+            || i.ref_count as usize > refs.len()
+            || i.depth >= i.node_count
+        {
+            return Err(Error::Corrupt { what: "counts" });
+        }
+        Ok(WideBvh {
+            scene,
+            nodes: &nodes[..i.node_count as usize],
+            refs: &refs[..i.ref_count as usize],
+            info,
+        })
+    }
+
+    /// Shape, counts and digest.
+    pub fn info(&self) -> &WideInfo {
+        &self.info
+    }
+
+    /// The scene the hierarchy was built on.
+    pub fn scene(&self) -> &Scene<'a> {
+        &self.scene
+    }
+
+    /// The nodes and the references.
+    pub fn parts(&self) -> (&'a [WideNode], &'a [u32]) {
+        (self.nodes, self.refs)
+    }
+
+    /// The root's box: the union of its entries' (empty for an empty scene).
+    pub fn bounds(&self) -> Aabb {
+        self.nodes.first().map_or(Aabb::EMPTY, |n| n.bounds())
+    }
+
+    /// Entries of the traversal stack that [`WideBvh::intersect`] and
+    /// [`WideBvh::occluded`] need: a node pushes up to [`WIDTH`] entries
+    /// and leaves `WIDTH - 1` waiting a level, so `(WIDTH - 1) * depth +
+    /// WIDTH`.
+    pub fn stack_len(&self) -> usize {
+        (self.info.depth as usize)
+            .saturating_mul(WIDTH - 1)
+            .saturating_add(WIDTH)
+    }
+}

@@ -1,0 +1,311 @@
+//! Closest-hit and any-hit traversal: one slab test of a node's four boxes
+//! at once, entries hit pushed nearest last (closest hit) so the nearest
+//! is visited first, each leaf's primitives tested with the kd-tree's
+//! tests and tie rule, so the hits are the kd-tree's bit for bit.
+//!
+//! The box test is chosen once per ray: rays with no zero direction
+//! component take the plain slab test; the others take one that decides
+//! their parallel axes by the origin (on a face counts as inside), as
+//! `1 / 0` would turn `0 * inf` into NaN there.
+
+use super::node::{WideNode, EMPTY_SLOT, LEAF_BIT, WIDTH};
+use super::WideBvh;
+use crate::geom::{Hit, PreparedRay, Ray, Scene};
+use crate::kd::traverse::tie_wins;
+use crate::TraceStats;
+
+/// A traversal stack entry: a node's entry (an interior child, or a leaf's
+/// run of references) whose box the ray enters at `t`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C)]
+pub struct WideStackItem {
+    /// [`WideNode::child`] of the entry.
+    pub child: u32,
+    /// [`WideNode::count`] of the entry.
+    pub count: u32,
+    /// Entry distance into its box.
+    pub t: f32,
+}
+
+/// Slack on the far distance so that rounding never loses a box the ray
+/// touches (Ize 2013: `1 + 2 gamma(3)`), as the binary hierarchies use.
+const FAR_SLACK: f32 = 1.0 + 4.0 * f32::EPSILON;
+
+/// What a walk does at a leaf and how far a box may lie.
+trait Query {
+    /// Entries are pushed nearest last when true (closest hit).
+    const SORTED: bool;
+    /// Boxes entered beyond this are skipped.
+    fn limit(&self) -> f32;
+    /// Tests a leaf's primitives; true stops the walk.
+    fn visit(&mut self, scene: &Scene, r: &PreparedRay, refs: &[u32]) -> bool;
+}
+
+struct Closest {
+    best: Hit,
+    t_max: f32,
+    tests: u64,
+}
+
+impl Query for Closest {
+    const SORTED: bool = true;
+    #[inline(always)]
+    fn limit(&self) -> f32 {
+        if self.best.is_hit() {
+            self.best.t
+        } else {
+            self.t_max
+        }
+    }
+    #[inline(always)]
+    fn visit(&mut self, scene: &Scene, r: &PreparedRay, refs: &[u32]) -> bool {
+        for &p in refs {
+            self.tests += 1;
+            if let Some(h) = scene.intersect_prim(p as usize, r, self.limit()) {
+                if !self.best.is_hit() || h.t < self.best.t || tie_wins(&h, &self.best) {
+                    self.best = h;
+                }
+            }
+        }
+        false
+    }
+}
+
+struct Any {
+    hit: bool,
+    t_max: f32,
+    tests: u64,
+}
+
+impl Query for Any {
+    const SORTED: bool = false;
+    #[inline(always)]
+    fn limit(&self) -> f32 {
+        self.t_max
+    }
+    #[inline(always)]
+    fn visit(&mut self, scene: &Scene, r: &PreparedRay, refs: &[u32]) -> bool {
+        for &p in refs {
+            self.tests += 1;
+            if scene.intersect_prim(p as usize, r, self.t_max).is_some() {
+                self.hit = true;
+                return true;
+            }
+        }
+        false
+    }
+}
+
+/// The ray as the slab test reads it.
+struct Slabs {
+    origin: [f32; 3],
+    inv_dir: [f32; 3],
+    /// Axes the ray is parallel to.
+    parallel: [bool; 3],
+}
+
+impl Slabs {
+    fn new(r: &PreparedRay) -> Slabs {
+        Slabs {
+            origin: r.origin.to_array(),
+            inv_dir: r.inv_dir.to_array(),
+            parallel: [r.dir.x == 0.0, r.dir.y == 0.0, r.dir.z == 0.0],
+        }
+    }
+
+    /// Entry and exit distances of the four boxes of `n`, clipped to
+    /// `[t0, t1]`: a box is hit when entry <= exit. `PARALLEL`: some axis
+    /// has a zero direction.
+    #[inline(always)]
+    fn test<const PARALLEL: bool>(
+        &self,
+        n: &WideNode,
+        t0: f32,
+        t1: f32,
+    ) -> ([f32; WIDTH], [f32; WIDTH]) {
+        let (mut tn, mut tf) = ([t0; WIDTH], [t1; WIDTH]);
+        for a in 0..3 {
+            let (o, inv) = (self.origin[a], self.inv_dir[a]);
+            for i in 0..WIDTH {
+                let (near, far) = if PARALLEL && self.parallel[a] {
+                    if o >= n.min[a][i] && o <= n.max[a][i] {
+                        (f32::NEG_INFINITY, f32::INFINITY)
+                    } else {
+                        (f32::INFINITY, f32::NEG_INFINITY)
+                    }
+                } else {
+                    let l = (n.min[a][i] - o) * inv;
+                    let h = (n.max[a][i] - o) * inv;
+                    (l.min(h), l.max(h))
+                };
+                tn[i] = tn[i].max(near);
+                tf[i] = tf[i].min(far * FAR_SLACK);
+            }
+        }
+        (tn, tf)
+    }
+}
+
+/// Pushes `item` among the entries pushed since `base`, far to near.
+#[inline(always)]
+fn push_nearest_last(
+    stack: &mut [WideStackItem],
+    base: usize,
+    sp: &mut usize,
+    item: WideStackItem,
+) {
+    let mut i = *sp;
+    while i > base && stack[i - 1].t < item.t {
+        stack[i] = stack[i - 1];
+        i -= 1;
+    }
+    stack[i] = item;
+    *sp += 1;
+}
+
+impl WideBvh<'_> {
+    /// Closest hit of `ray`, on the caller's `stack` of at least
+    /// [`WideBvh::stack_len`] entries (a shorter one stops the walk with
+    /// a fault counted in `stats`).
+    pub fn intersect(&self, ray: &Ray, stack: &mut [WideStackItem], stats: &mut TraceStats) -> Hit {
+        stats.rays += 1;
+        if !ray.is_valid() {
+            return Hit::MISS;
+        }
+        let r = PreparedRay::new(ray);
+        let mut q = Closest {
+            best: Hit::MISS,
+            t_max: r.t_max,
+            tests: 0,
+        };
+        self.walk(&r, &mut q, stack, stats);
+        stats.prim_tests += q.tests;
+        q.best
+    }
+
+    /// Whether anything lies on `ray`'s segment; the stack as for
+    /// [`WideBvh::intersect`].
+    pub fn occluded(&self, ray: &Ray, stack: &mut [WideStackItem], stats: &mut TraceStats) -> bool {
+        stats.rays += 1;
+        if !ray.is_valid() {
+            return false;
+        }
+        let r = PreparedRay::new(ray);
+        let mut q = Any {
+            hit: false,
+            t_max: r.t_max,
+            tests: 0,
+        };
+        self.walk(&r, &mut q, stack, stats);
+        stats.prim_tests += q.tests;
+        q.hit
+    }
+
+    /// The box test chosen once for the ray, then the walk.
+    #[inline(always)]
+    fn walk<Q: Query>(
+        &self,
+        r: &PreparedRay,
+        q: &mut Q,
+        stack: &mut [WideStackItem],
+        stats: &mut TraceStats,
+    ) {
+        let slabs = Slabs::new(r);
+        if slabs.parallel.iter().any(|&p| p) {
+            self.walk_with::<Q, true>(r, &slabs, q, stack, stats)
+        } else {
+            self.walk_with::<Q, false>(r, &slabs, q, stack, stats)
+        }
+    }
+
+    /// Every entry popped costs one from a budget of what a valid tree
+    /// can hold, so corrupt indices end in a fault, never a hang.
+    #[inline(always)]
+    fn walk_with<Q: Query, const PARALLEL: bool>(
+        &self,
+        r: &PreparedRay,
+        slabs: &Slabs,
+        q: &mut Q,
+        stack: &mut [WideStackItem],
+        stats: &mut TraceStats,
+    ) {
+        let Some(first) = stack.first_mut() else {
+            stats.faults += 1;
+            return;
+        };
+        *first = WideStackItem {
+            child: 0,
+            count: 0,
+            t: r.t_min,
+        };
+        let mut sp = 1;
+        let mut budget = self.nodes.len().saturating_mul(WIDTH + 1);
+        let (mut interior, mut leaves, mut boxes, mut faults) = (0u64, 0u64, 0u64, 0u64);
+        while sp > 0 {
+            sp -= 1;
+            let it = stack[sp];
+            if it.t > q.limit() {
+                continue;
+            }
+            if budget == 0 {
+                faults += 1;
+                break;
+            }
+            budget -= 1;
+            if it.child & LEAF_BIT != 0 {
+                leaves += 1;
+                let first = (it.child & !LEAF_BIT) as usize;
+                let Some(refs) = self
+                    .refs
+                    .get(first..)
+                    .and_then(|s| s.get(..it.count as usize))
+                else {
+                    faults += 1;
+                    break;
+                };
+                if q.visit(&self.scene, r, refs) {
+                    break;
+                }
+                continue;
+            }
+            let Some(n) = self.nodes.get(it.child as usize) else {
+                faults += 1;
+                break;
+            };
+            interior += 1;
+            let (tn, tf) = slabs.test::<PARALLEL>(n, r.t_min, q.limit());
+            let (mut hit, mut used) = (0u32, 0u32);
+            for i in 0..WIDTH {
+                hit |= ((tn[i] <= tf[i]) as u32) << i;
+                used |= ((n.child[i] != EMPTY_SLOT) as u32) << i;
+            }
+            hit &= used;
+            boxes += used.count_ones() as u64;
+            if sp + WIDTH > stack.len() {
+                faults += 1;
+                break;
+            }
+            let base = sp;
+            while hit != 0 {
+                let i = hit.trailing_zeros() as usize;
+                hit &= hit - 1;
+                let item = WideStackItem {
+                    child: n.child[i],
+                    count: n.count[i],
+                    t: tn[i],
+                };
+                if Q::SORTED {
+                    push_nearest_last(stack, base, &mut sp, item);
+                } else {
+                    stack[sp] = item;
+                    sp += 1;
+                }
+            }
+        }
+        stats.traversal_steps += interior + leaves;
+        stats.interior_steps += interior;
+        stats.leaf_steps += leaves;
+        stats.box_tests += boxes;
+        stats.faults += (faults > 0) as u64;
+    }
+}

@@ -1,0 +1,281 @@
+//! The wide hierarchy against the brute-force oracle and, bit for bit,
+//! against the kd-tree's hierarchical traversal; its shape, its memory
+//! bound, and rays parallel to the box faces.
+mod common;
+
+use common::*;
+use coray::kd::{KdParams, Traversal};
+use coray::owned::{stack, OwnedKd, OwnedWide};
+use coray::wide::{self, WideBvh, WideNode, WideScratch, WideStackItem, WideStorage, WIDTH};
+use coray::{oracle, Aabb, Error, Hit, Ray, Scene, TraceStats, Vec3};
+
+/// Hit for hit: the same t (bits), primitive and normal.
+fn identical(a: &Hit, b: &Hit) -> bool {
+    a.is_hit() == b.is_hit()
+        && (!a.is_hit()
+            || (a.t.to_bits() == b.t.to_bits()
+                && (a.geom_id, a.prim_id) == (b.geom_id, b.prim_id)
+                && a.ng == b.ng))
+}
+
+/// Traces `rays` through `w` and through the kd-tree over the same scene
+/// and checks both against the oracle (closest t, any hit) and against
+/// each other bit for bit; returns the hits.
+fn check(w: &WideBvh, kd: &coray::kd::KdTree, rays: &[Ray], what: &str) -> usize {
+    let scene = w.scene();
+    let mut stk = stack::<WideStackItem>(w.stack_len());
+    let mut kst = kst();
+    let mut hits = 0;
+    for (i, r) in rays.iter().enumerate() {
+        let mut st = TraceStats::default();
+        let got = w.intersect(r, &mut stk, &mut st);
+        let any = w.occluded(r, &mut stk, &mut st);
+        assert_eq!(st.faults, 0, "{what}: ray {i} faulted");
+        let want = oracle::intersect(scene, r);
+        assert_eq!(
+            (got.is_hit(), got.is_hit().then_some(got.t)),
+            (want.is_hit(), want.is_hit().then_some(want.t)),
+            "{what}: ray {i} {r:?}: got {got:?}, oracle {want:?}"
+        );
+        assert_eq!(any, oracle::occluded(scene, r), "{what}: ray {i} occluded");
+        let k = kd.intersect(r, Traversal::Hierarchical, &mut kst, &mut st);
+        assert!(
+            identical(&got, &k),
+            "{what}: ray {i}: wide {got:?}, kd {k:?}"
+        );
+        hits += got.is_hit() as usize;
+    }
+    hits
+}
+
+/// Rays along the axes and in the planes of the scene's coordinates (zero
+/// direction components, origins on box faces), plus random ones.
+fn rays_with_parallels(rng: &mut Rng, scene: &Scene, n: usize, s: f32) -> Vec<Ray> {
+    let mut rays = random_rays(rng, n, s);
+    for p in 0..scene.prim_count().min(200) {
+        let Some(b) = scene.prim_bounds(p) else {
+            continue;
+        };
+        let c = (b.min + b.max) * 0.5;
+        for axis in 0..3 {
+            let mut d = Vec3::ZERO;
+            d[axis] = 1.0;
+            // From far below the box along an axis, through its centre and
+            // along its faces.
+            for o in [c, b.min, b.max] {
+                let mut from = o;
+                from[axis] = -4.0 * s;
+                rays.push(Ray::new(from, d, 0.0, f32::INFINITY));
+                rays.push(Ray::new(-from, -d, 0.0, f32::INFINITY));
+            }
+            // In a coordinate plane through the box's corner.
+            let mut e = Vec3::new(1.0, 1.0, 1.0);
+            e[axis] = 0.0;
+            rays.push(Ray::new(b.min - e * 2.0 * s, e, 0.0, f32::INFINITY));
+        }
+    }
+    rays
+}
+
+#[test]
+fn every_leaf_size_matches_the_oracle_and_the_kd_tree() {
+    let mut rng = Rng(31);
+    let o = random_scene(&mut rng, 900, 200, 200, 10.0);
+    let scene = o.scene();
+    let rays = rays_with_parallels(&mut rng, &scene, 1500, 10.0);
+    let kd = OwnedKd::new(&scene, &KdParams::auto()).unwrap();
+    let tree = kd.tree(scene).unwrap();
+    let n = scene.prim_count();
+    for leaf in [1, 2, 4, 9] {
+        let owned = OwnedWide::new(&scene, leaf).unwrap();
+        let w = owned.view(scene).unwrap();
+        let shape = w.validate().unwrap();
+        let info = w.info();
+        assert_eq!(shape.refs as usize, n, "leaf {leaf}");
+        assert_eq!(
+            (shape.nodes, shape.leaves),
+            (info.node_count, info.leaf_count)
+        );
+        // Every binary interior node is a wide node or opened into one:
+        // fewer wide nodes than primitives, and with leaves of one
+        // primitive exactly one leaf entry a primitive.
+        assert!((info.node_count as usize) < n);
+        if leaf == 1 {
+            assert_eq!(info.leaf_count as usize, n);
+        }
+        // A wide tree is much shallower than the binary one.
+        assert!(info.depth <= 12, "leaf {leaf}: depth {}", info.depth);
+        let hits = check(&w, &tree, &rays, &format!("leaf {leaf}"));
+        assert!(hits > 600, "leaf {leaf}: {hits} hits");
+    }
+}
+
+/// Rays whose box tests fall exactly on a face: the parallel-axis test
+/// takes a face as inside (1 / 0 = inf would make 0 * inf NaN there).
+#[test]
+fn axis_parallel_rays_along_box_faces() {
+    let mut o = OwnedScene::default();
+    // Unit quads on the six faces of a cube, and one inside.
+    for axis in 0..3 {
+        for pos in [0.0, 1.0] {
+            o.add_quad(axis, pos, [0.0, 0.0], [1.0, 1.0]);
+        }
+    }
+    o.add_quad(1, 0.5, [0.25, 0.25], [0.75, 0.75]);
+    let scene = o.scene();
+    let kd = OwnedKd::new(&scene, &KdParams::auto()).unwrap();
+    let tree = kd.tree(scene).unwrap();
+    let mut rays = Vec::new();
+    for axis in 0..3 {
+        for u in [0.0, 0.25, 0.5, 1.0] {
+            for v in [0.0, 0.5, 0.75, 1.0] {
+                let mut from = Vec3::splat(0.0);
+                let (a1, a2) = ((axis + 1) % 3, (axis + 2) % 3);
+                from[a1] = u;
+                from[a2] = v;
+                from[axis] = -2.0;
+                let mut d = Vec3::ZERO;
+                d[axis] = 1.0;
+                rays.push(Ray::new(from, d, 0.0, f32::INFINITY));
+                from[axis] = 3.0;
+                rays.push(Ray::new(from, -d, 0.0, f32::INFINITY));
+            }
+        }
+    }
+    for leaf in [1, 2] {
+        let owned = OwnedWide::new(&scene, leaf).unwrap();
+        let w = owned.view(scene).unwrap();
+        w.validate().unwrap();
+        let hits = check(&w, &tree, &rays, "faces");
+        assert!(hits >= rays.len() / 2, "{hits} of {}", rays.len());
+    }
+}
+
+#[test]
+fn empty_single_and_degenerate_scenes() {
+    let mut rng = Rng(5);
+    let rays = random_rays(&mut rng, 200, 1.0);
+    // Empty: one node with no entries, every ray misses.
+    let empty = OwnedScene::default();
+    let owned = OwnedWide::new(&empty.scene(), 1).unwrap();
+    let w = owned.view(empty.scene()).unwrap();
+    let shape = w.validate().unwrap();
+    assert_eq!(
+        (shape.nodes, shape.leaves, shape.refs, shape.depth),
+        (1, 0, 0, 0)
+    );
+    let mut stk = stack::<WideStackItem>(w.stack_len());
+    let mut st = TraceStats::default();
+    for r in &rays {
+        assert!(!w.intersect(r, &mut stk, &mut st).is_hit());
+        assert!(!w.occluded(r, &mut stk, &mut st));
+    }
+    // One triangle: one node holding one leaf entry.
+    let mut one = OwnedScene::default();
+    one.add_triangle(Vec3::ZERO, Vec3::X, Vec3::Y);
+    let owned = OwnedWide::new(&one.scene(), 1).unwrap();
+    let w = owned.view(one.scene()).unwrap();
+    let shape = w.validate().unwrap();
+    assert_eq!(
+        (shape.nodes, shape.leaves, shape.refs, shape.depth),
+        (1, 1, 1, 0)
+    );
+    let down = Ray::new(Vec3::new(0.2, 0.2, 1.0), -Vec3::Z, 0.0, f32::INFINITY);
+    assert_eq!(w.intersect(&down, &mut stk, &mut st).t, 1.0);
+    // Degenerate triangles stay out: two of three references.
+    let mut deg = one.clone();
+    deg.add_triangle(Vec3::X, Vec3::X, Vec3::X);
+    deg.add_triangle(Vec3::Z, Vec3::X + Vec3::Z, Vec3::Y + Vec3::Z);
+    let owned = OwnedWide::new(&deg.scene(), 1).unwrap();
+    let w = owned.view(deg.scene()).unwrap();
+    let shape = w.validate().unwrap();
+    assert_eq!((shape.nodes, shape.leaves, shape.refs), (1, 2, 2));
+    assert_eq!(w.intersect(&down, &mut stk, &mut st).t, 0.0);
+    assert_eq!(st.faults, 0);
+}
+
+/// Exact counts on a grid of 64 unit quads (128 triangles): leaves of one
+/// primitive give 128 leaf entries, every node full but the last level's.
+#[test]
+fn grid_counts() {
+    let mut o = OwnedScene::default();
+    for i in 0..8 {
+        for j in 0..8 {
+            let (x, y) = (i as f32 * 2.0, j as f32 * 2.0);
+            o.add_quad(2, 0.0, [x, y], [x + 1.0, y + 1.0]);
+        }
+    }
+    let scene = o.scene();
+    let owned = OwnedWide::new(&scene, 1).unwrap();
+    let w = owned.view(scene).unwrap();
+    let shape = w.validate().unwrap();
+    assert_eq!((shape.refs, shape.leaves), (128, 128));
+    // The SAH splits the grid into a perfect binary tree of depth 7; the
+    // collapse takes two binary levels a node: 1 + 4 + 16 + 64 nodes, the
+    // last level's holding two leaves each.
+    assert_eq!((shape.nodes, shape.depth), (85, 3));
+    assert!(w.parts().0.iter().all(|n| n.len() == WIDTH || n.len() == 2));
+}
+
+/// A build fits in exactly the requirements and refuses one node less.
+#[test]
+fn exact_fit_and_one_less() {
+    let mut rng = Rng(8);
+    let o = random_scene(&mut rng, 300, 40, 40, 5.0);
+    let scene = o.scene();
+    let req = wide::requirements(scene.prim_count());
+    for less in [0, 1] {
+        let mut nodes = vec![WideNode::default(); req.nodes - less];
+        let mut refs = vec![0u32; req.refs];
+        let mut bvh_nodes = vec![coray::bvh::BvhNode::default(); req.bvh_nodes];
+        let mut boxes = vec![Aabb::EMPTY; req.boxes];
+        let mut keys = vec![0.0; req.keys];
+        let mut links = vec![0u32; req.links];
+        let r = wide::build(
+            &scene,
+            2,
+            WideStorage {
+                nodes: &mut nodes,
+                refs: &mut refs,
+            },
+            WideScratch {
+                bvh_nodes: &mut bvh_nodes,
+                boxes: &mut boxes,
+                keys: &mut keys,
+                links: &mut links,
+            },
+        );
+        match less {
+            0 => {
+                let w = r.unwrap();
+                w.validate().unwrap();
+                assert!(w.info().node_count as usize <= req.nodes);
+            }
+            _ => assert!(matches!(
+                r.map(|_| ()),
+                Err(Error::SliceTooSmall { slice: "nodes", .. })
+            )),
+        }
+    }
+}
+
+/// A stack shorter than `stack_len` ends the walk with a fault, never a
+/// panic; the Accel contract refuses it up front.
+#[test]
+fn short_stack_faults() {
+    use coray::Accel;
+    let mut rng = Rng(9);
+    let o = random_scene(&mut rng, 500, 0, 0, 5.0);
+    let scene = o.scene();
+    let owned = OwnedWide::new(&scene, 1).unwrap();
+    let w = owned.view(scene).unwrap();
+    let rays = random_rays(&mut rng, 100, 5.0);
+    let mut st = TraceStats::default();
+    let mut short = stack::<WideStackItem>(2);
+    for r in &rays {
+        w.intersect(r, &mut short, &mut st);
+    }
+    assert!(st.faults > 0);
+    assert!(Accel::intersect(&w, &rays[0], (), &mut short, &mut st).is_err());
+    assert!(WideBvh::intersect(&w, &rays[0], &mut [], &mut st) == Hit::MISS);
+}
