@@ -372,8 +372,46 @@ static void check_scene(const char *name, TestScene *ts, RTCDevice dev, int cam_
         free(stack);
         free(arena);
     }
+    /* The wide hierarchy, unit directions as the hierarchies; its one-ray
+     * call against its array call on the first rays. */
+    if (unit_dirs) {
+        CorayWideParams p = coray_wide_params_default();
+        CorayRequirements req = requirements0();
+        CorayWideInfo info = coray_wide_info_default();
+        CorayShape shape = coray_shape_default();
+        CorayWide h;
+        void *arena, *scratch, *stack;
+        char what[64];
+        snprintf(what, sizeof what, "%s/unit/wide", name);
+        CHECK_STATUS(coray_wide_requirements(ts->nt + ts->ns + ts->nc, &p, &req), CORAY_STATUS_OK);
+        arena = arena_alloc(req.arena_bytes);
+        scratch = arena_alloc(req.scratch_bytes);
+        CHECK_STATUS(coray_wide_build(&ts->view, &p, arena, req.arena_bytes, scratch, req.scratch_bytes, NULL), CORAY_STATUS_OK);
+        free(scratch);
+        CHECK_STATUS(coray_wide_open(arena, req.arena_bytes, &ts->view, &h), CORAY_STATUS_OK);
+        CHECK_STATUS(coray_wide_info(&h, &info), CORAY_STATUS_OK);
+        CHECK_STATUS(coray_wide_validate(&h, &shape), CORAY_STATUS_OK);
+        CHECK(shape.node_count == info.node_count && shape.ref_count == info.ref_count);
+        CHECK(info.stack_bytes <= req.stack_bytes && info.arena_bytes_used <= req.arena_bytes);
+        stack = arena_alloc(info.stack_bytes);
+        CHECK_STATUS(coray_wide_intersect(&h, rays, mine, n_total, stack, info.stack_bytes, NULL), CORAY_STATUS_OK);
+        compare(what, ts, rays, mine, theirs, n_total, tl, cls);
+        for (i = 0; i < n_total && i < 2000; i++) {
+            CorayHit one;
+            uint8_t o;
+            CHECK_STATUS(coray_wide_intersect1(&h, &rays[i], &one, stack, info.stack_bytes, NULL), CORAY_STATUS_OK);
+            CHECK(one.geom_id == mine[i].geom_id && one.prim_id == mine[i].prim_id && memcmp(&one.t, &mine[i].t, sizeof one.t) == 0);
+            CHECK_STATUS(coray_wide_occluded1(&h, &rays[i], &o, stack, info.stack_bytes, NULL), CORAY_STATUS_OK);
+            CHECK(o == (mine[i].geom_id != CORAY_INVALID_ID));
+        }
+        CHECK_STATUS(coray_wide_occluded(&h, rays, occ, n_total, stack, info.stack_bytes, NULL), CORAY_STATUS_OK);
+        compare_occluded(what, rays, mine, theirs, occ, eocc, cls, n_total, tl);
+        free(stack);
+        free(arena);
+    }
     printf("%s, %s directions: %zu rays (%zu camera, %zu random, %zu from surfaces) x 4 kd variants%s\n", name,
-           unit_dirs ? "unit" : "unnormalised", n_total, n_cam, n_random, n_surf, unit_dirs ? " and 6 hierarchies" : "");
+           unit_dirs ? "unit" : "unnormalised", n_total, n_cam, n_random, n_surf,
+           unit_dirs ? ", 6 hierarchies and the wide one" : "");
     rtcReleaseScene(sc);
     free(rays);
     free(mine);
@@ -386,7 +424,7 @@ static void check_scene(const char *name, TestScene *ts, RTCDevice dev, int cam_
 static void report(const char *mode, const Tally *tl) {
     printf("[%s] %ld distinct rays, each traced by coray's kd-trees (auto and paper, "
            "hierarchical and ropes) and, with unit directions, its hierarchies (TDBS, TDBS-SAH, NN on the smaller "
-           "scene, NN chain, R-tree, R*-tree)\n", mode,
+           "scene, NN chain, R-tree, R*-tree, wide)\n", mode,
            tl->distinct);
     printf("[%s] closest hit: %ld rays compared, %ld hits, %ld ties at the same distance, %ld grazing ties, %ld disagreements\n",
            mode, tl->compared, tl->hits, tl->ties_same_t, tl->ties_graze, tl->disagreements);

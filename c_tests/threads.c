@@ -1,6 +1,6 @@
 /* Every structure traced from 4 threads at once gives, bit for bit, what
  * one thread gives: the kd-tree (both traversals), a TDBS hierarchy, an
- * R*-tree, a projection hierarchy, LCTS image casts and patch-to-patch
+ * R*-tree, the wide hierarchy, a projection hierarchy, LCTS image casts and patch-to-patch
  * visibility. Structures are shared read-only; each thread brings its own
  * stack and scratch. Run under helgrind by the test suite. */
 #include <pthread.h>
@@ -18,15 +18,17 @@ typedef struct {
     size_t bvh_stack, rtree_stack;
     CorayProj proj;
     size_t proj_stack;
+    CorayWide wide;
+    size_t wide_stack;
     CorayCamera cam;
     const CorayRay *rays, *eye_rays;
-    void *arenas[3];
+    void *arenas[4];
 } Shared;
 
 /* What one run of every task gives. */
 typedef struct {
-    CorayHit hits[6][RAYS];
-    uint8_t occ[6][RAYS];
+    CorayHit hits[7][RAYS];
+    uint8_t occ[7][RAYS];
     CorayHit image[2][RES * RES];
     CorayPatchResult patch;
     CorayStatus status;
@@ -45,6 +47,7 @@ static void run_all(Out *o) {
     const Shared *s = shared;
     KdStack kst;
     void *bst = stack_for(s->bvh_stack), *rst = stack_for(s->rtree_stack), *pst = stack_for(s->proj_stack);
+    void *wst = stack_for(s->wide_stack);
     uint32_t trav;
     int k;
     o->status = CORAY_STATUS_OK;
@@ -56,6 +59,8 @@ static void run_all(Out *o) {
     note(o, coray_bvh_occluded(&s->bvh, s->rays, o->occ[2], RAYS, bst, s->bvh_stack, NULL));
     note(o, coray_bvh_intersect(&s->rtree, s->rays, o->hits[3], RAYS, rst, s->rtree_stack, NULL));
     note(o, coray_bvh_occluded(&s->rtree, s->rays, o->occ[3], RAYS, rst, s->rtree_stack, NULL));
+    note(o, coray_wide_intersect(&s->wide, s->rays, o->hits[6], RAYS, wst, s->wide_stack, NULL));
+    note(o, coray_wide_occluded(&s->wide, s->rays, o->occ[6], RAYS, wst, s->wide_stack, NULL));
     for (k = 0; k < 2; k++) {
         uint32_t scheme = k == 0 ? CORAY_PROJ_SCHEME_2D : CORAY_PROJ_SCHEME_COMBINATION;
         note(o, coray_proj_intersect(&s->proj, scheme, s->eye_rays, o->hits[4 + k], RES * RES, pst, s->proj_stack, NULL));
@@ -85,6 +90,7 @@ static void run_all(Out *o) {
     free(bst);
     free(rst);
     free(pst);
+    free(wst);
 }
 
 static void *thread_main(void *arg) {
@@ -144,6 +150,20 @@ int main(void) {
         CHECK_STATUS(coray_proj_open(s.arenas[2], req.arena_bytes, &ts.view, &s.proj), CORAY_STATUS_OK);
         s.proj_stack = req.stack_bytes;
     }
+    {
+        CorayWideParams p = coray_wide_params_default();
+        CorayWideInfo info = coray_wide_info_default();
+        CorayRequirements req = requirements0();
+        void *scratch;
+        CHECK_STATUS(coray_wide_requirements(ts.nt + ts.ns + ts.nc, &p, &req), CORAY_STATUS_OK);
+        s.arenas[3] = arena_alloc(req.arena_bytes);
+        scratch = arena_alloc(req.scratch_bytes);
+        CHECK_STATUS(coray_wide_build(&ts.view, &p, s.arenas[3], req.arena_bytes, scratch, req.scratch_bytes, NULL), CORAY_STATUS_OK);
+        free(scratch);
+        CHECK_STATUS(coray_wide_open(s.arenas[3], req.arena_bytes, &ts.view, &s.wide), CORAY_STATUS_OK);
+        CHECK_STATUS(coray_wide_info(&s.wide, &info), CORAY_STATUS_OK);
+        s.wide_stack = info.stack_bytes;
+    }
     shared = &s;
 
     memset(ref, 0, sizeof *ref);
@@ -160,10 +180,12 @@ int main(void) {
         CHECK(memcmp(outs[i].image, ref->image, sizeof ref->image) == 0);
         CHECK(outs[i].patch.visible == ref->patch.visible && outs[i].patch.samples == ref->patch.samples && outs[i].patch.cut_len == ref->patch.cut_len);
     }
-    /* The two kd traversals and both hierarchies agree with each other too. */
+    /* The two kd traversals and the hierarchies agree with each other too;
+     * the wide one gives the kd-tree's hits bit for bit. */
     CHECK(memcmp(ref->occ[0], ref->occ[2], RAYS) == 0 && memcmp(ref->occ[0], ref->occ[3], RAYS) == 0);
+    CHECK(memcmp(ref->occ[0], ref->occ[6], RAYS) == 0 && memcmp(ref->hits[0], ref->hits[6], sizeof ref->hits[0]) == 0);
     free(s.kd.arena);
-    for (i = 0; i < 3; i++) free(s.arenas[i]);
+    for (i = 0; i < 4; i++) free(s.arenas[i]);
     free(ref);
     free(outs);
     free(rays);

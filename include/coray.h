@@ -14,7 +14,7 @@
 #define CORAY_VERSION_MAJOR 1
 
 // Minor version: new functions or struct fields, compatible.
-#define CORAY_VERSION_MINOR 2
+#define CORAY_VERSION_MINOR 3
 
 // Patch version: fixes only.
 #define CORAY_VERSION_PATCH 0
@@ -493,6 +493,47 @@ typedef struct CorayProj {
 
 // How a ray is tested against the nodes: `CORAY_PROJ_SCHEME_*`.
 typedef uint32_t CorayProjScheme;
+
+// Parameters of a wide hierarchy build. Get them from
+// `coray_wide_params_default`.
+typedef struct CorayWideParams {
+  // `sizeof(CorayWideParams)`.
+  size_t struct_size;
+  // Most primitives per leaf entry (at least 1; default 2, the fastest
+  // measured on incoherent rays).
+  uint32_t leaf_size;
+} CorayWideParams;
+
+// What a wide hierarchy holds, from `coray_wide_info` (O(1)).
+typedef struct CorayWideInfo {
+  // `sizeof(CorayWideInfo)`.
+  size_t struct_size;
+  // Nodes in use (four entries each at most).
+  uint32_t node_count;
+  // Leaf entries (runs of references).
+  uint32_t leaf_count;
+  // Primitives in the hierarchy.
+  uint32_t ref_count;
+  // Level of the deepest node (the root alone: 0).
+  uint32_t depth;
+  // The build's leaf size.
+  uint32_t leaf_size;
+  // Bytes of the arena the layout covers.
+  size_t arena_bytes_used;
+  // Bytes of traversal stack every trace call needs.
+  size_t stack_bytes;
+  // Lower corner of the root's box (empty hierarchy: +inf).
+  float bounds_min[3];
+  // Upper corner of the root's box (empty hierarchy: -inf).
+  float bounds_max[3];
+} CorayWideInfo;
+
+// An opened wide hierarchy: fill it with `coray_wide_open`. Read-only:
+// many threads may share one.
+typedef struct CorayWide {
+  // Opaque to the caller.
+  uint64_t opaque[32];
+} CorayWide;
 
 // The scene's triangle mesh.
 #define CORAY_GEOM_TRIANGLES 0
@@ -1147,6 +1188,119 @@ enum CorayStatus coray_proj_occluded(const struct CorayProj *proj,
 // Safety: as `coray_proj_occluded` with `count` 1.
 enum CorayStatus coray_proj_occluded1(const struct CorayProj *proj,
                                       CorayProjScheme scheme,
+                                      const struct CorayRay *ray,
+                                      uint8_t *occluded,
+                                      void *stack,
+                                      size_t stack_bytes,
+                                      struct CorayTraceStats *stats);
+
+// Default parameters (leaves of 2) with `struct_size` set.
+struct CorayWideParams coray_wide_params_default(void);
+
+// A `CorayWideInfo` to fill, `struct_size` set.
+struct CorayWideInfo coray_wide_info_default(void);
+
+// Arena, scratch and stack sizes for a wide hierarchy over `prim_count`
+// primitives; the build needs exactly `arena_bytes` and `scratch_bytes`.
+// `stack_bytes` bounds any build over that many primitives; the built
+// hierarchy's own need (`CorayWideInfo.stack_bytes`) is far smaller.
+//
+// Safety: `params` and `out` are NULL or valid pointers to their types.
+enum CorayStatus coray_wide_requirements(size_t prim_count,
+                                         const struct CorayWideParams *params,
+                                         struct CorayRequirements *out);
+
+// Builds a wide hierarchy over `scene` into `arena`, with `scratch` as
+// scratch (free again when this returns).
+//
+// Both are 16-byte aligned and overlap neither each other nor the scene,
+// and hold the requirements' `arena_bytes` and `scratch_bytes`. On
+// `CORAY_STATUS_ARENA_TOO_SMALL`, `*needed_bytes` (if not NULL) receives
+// the size the arena or scratch that was too small needs. Degenerate
+// primitives stay out (never hit). The part of the arena the layout
+// covers is written entirely; bytes past it are not touched.
+//
+// Safety: every pointer is NULL or valid for its documented size; the
+// arenas are not read or written by anyone else during the call.
+enum CorayStatus coray_wide_build(const struct CorayScene *scene,
+                                  const struct CorayWideParams *params,
+                                  void *arena,
+                                  size_t arena_bytes,
+                                  void *scratch,
+                                  size_t scratch_bytes,
+                                  size_t *needed_bytes);
+
+// Opens the wide hierarchy in `arena` with the scene it was built on:
+// O(1) checks, then `*out` is the handle every trace, info and validate
+// call takes. The arena and the scene's arrays stay in place and
+// unchanged while the handle is used. Validate an arena from untrusted
+// storage once, as for a kd-tree.
+//
+// Safety: `arena` is NULL or readable for `arena_bytes`; `scene` and `out`
+// NULL or valid.
+enum CorayStatus coray_wide_open(const void *arena,
+                                 size_t arena_bytes,
+                                 const struct CorayScene *scene,
+                                 struct CorayWide *out);
+
+// What the hierarchy holds, from its header (O(1)).
+//
+// Safety: `wide` is a handle `coray_wide_open` filled; `out` NULL or writable.
+enum CorayStatus coray_wide_info(const struct CorayWide *wide, struct CorayWideInfo *out);
+
+// Checks every structural invariant of the hierarchy against its scene,
+// in time linear in the hierarchy, never crashing on any bytes: a tree
+// in breadth-first order, boxes exact unions, indices in range, counts,
+// depth and reference digest as recorded. `CORAY_STATUS_CORRUPT_ARENA`
+// when anything is wrong. Once it accepts an arena, every call on it
+// gives the results of a clean build. `out` may be NULL.
+//
+// Safety: as `coray_wide_info`.
+enum CorayStatus coray_wide_validate(const struct CorayWide *wide, struct CorayShape *out);
+
+// Closest hits of `count` rays: `hits[i]` for `rays[i]`. `stack` is the
+// caller's traversal stack of `stack_bytes` (at least the info's
+// `stack_bytes`, 16-byte aligned; one per thread). `stats` may be NULL.
+// Many threads may trace one hierarchy at once, each with its own stack.
+//
+// Safety: `wide` as in `coray_wide_info`; `rays` and `hits` hold `count`
+// elements (may be NULL when `count` is 0); `stack` is writable for
+// `stack_bytes`; `stats` NULL or writable.
+enum CorayStatus coray_wide_intersect(const struct CorayWide *wide,
+                                      const struct CorayRay *rays,
+                                      struct CorayHit *hits,
+                                      size_t count,
+                                      void *stack,
+                                      size_t stack_bytes,
+                                      struct CorayTraceStats *stats);
+
+// `coray_wide_intersect` for one ray.
+//
+// Safety: as `coray_wide_intersect` with `count` 1.
+enum CorayStatus coray_wide_intersect1(const struct CorayWide *wide,
+                                       const struct CorayRay *ray,
+                                       struct CorayHit *hit,
+                                       void *stack,
+                                       size_t stack_bytes,
+                                       struct CorayTraceStats *stats);
+
+// Any-hit queries (shadow rays): `occluded[i]` is 1 when something lies
+// on `rays[i]` within `[tnear, tfar]`, else 0. Otherwise as
+// `coray_wide_intersect`.
+//
+// Safety: as `coray_wide_intersect`, with `occluded` holding `count` bytes.
+enum CorayStatus coray_wide_occluded(const struct CorayWide *wide,
+                                     const struct CorayRay *rays,
+                                     uint8_t *occluded,
+                                     size_t count,
+                                     void *stack,
+                                     size_t stack_bytes,
+                                     struct CorayTraceStats *stats);
+
+// `coray_wide_occluded` for one ray.
+//
+// Safety: as `coray_wide_occluded` with `count` 1.
+enum CorayStatus coray_wide_occluded1(const struct CorayWide *wide,
                                       const struct CorayRay *ray,
                                       uint8_t *occluded,
                                       void *stack,

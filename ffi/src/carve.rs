@@ -50,6 +50,9 @@ unsafe impl Plain for coray::bvh::BvhStackItem {}
 unsafe impl Plain for coray::bvh::layout::BvhArenaHeader {}
 unsafe impl Plain for coray::proj::layout::ProjArenaHeader {}
 unsafe impl Plain for coray::proj::Rect {}
+unsafe impl Plain for coray::wide::WideNode {}
+unsafe impl Plain for coray::wide::WideStackItem {}
+unsafe impl Plain for coray::wide::layout::WideArenaHeader {}
 
 const _: () = {
     use coray::kd::*;
@@ -71,6 +74,12 @@ const _: () = {
     assert!(size_of::<coray::bvh::layout::BvhArenaHeader>() == 124);
     assert!(size_of::<coray::proj::layout::ProjArenaHeader>() == 128);
     assert!(size_of::<coray::proj::Rect>() == 20 && align_of::<coray::proj::Rect>() == 4);
+    assert!(
+        size_of::<coray::wide::WideNode>() == 128
+            && align_of::<coray::wide::WideNode>() <= ARENA_ALIGN
+    );
+    assert!(size_of::<coray::wide::WideStackItem>() == 12);
+    assert!(size_of::<coray::wide::layout::WideArenaHeader>() == 60);
 };
 
 /// A byte range `[start, end)` that one call reads or writes (its end

@@ -37,6 +37,15 @@ pub struct CorayProj {
     pub opaque: [u64; 32],
 }
 
+/// An opened wide hierarchy: fill it with `coray_wide_open`. Read-only:
+/// many threads may share one.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct CorayWide {
+    /// Opaque to the caller.
+    pub opaque: [u64; 32],
+}
+
 /// What every handle holds: the arena, the scene's arrays, and the byte
 /// offsets and element counts of the arena's parts (at most 8). The open
 /// calls fill one and store its [`Handle::words`]; every later call reads
@@ -60,6 +69,7 @@ pub(crate) struct Handle {
 pub(crate) const KIND_KD: u64 = 0x4b44;
 pub(crate) const KIND_BVH: u64 = 0x4256;
 pub(crate) const KIND_PROJ: u64 = 0x504a;
+pub(crate) const KIND_WIDE: u64 = 0x5744;
 
 const WORDS: usize = 32;
 /// Word 0 is the seal; words 1 to `SEALED_END - 1` are what it covers:

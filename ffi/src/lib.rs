@@ -34,19 +34,21 @@ pub mod saved;
 pub mod simd;
 #[cfg(feature = "std")]
 pub mod through_c;
+mod wide;
 
 pub use abi::*;
 pub use build_jobs::{CorayKdRunJob, CorayKdRunJobs};
 pub use bvh::*;
 pub use cast::*;
-pub use handle::{CorayBvh, CorayKdTree, CorayProj};
+pub use handle::{CorayBvh, CorayKdTree, CorayProj, CorayWide};
 pub use kdtree::*;
 pub use proj::*;
+pub use wide::*;
 
 /// Major version of the C ABI: changes only with an incompatible change.
 pub const CORAY_VERSION_MAJOR: u32 = 1;
 /// Minor version: new functions or struct fields, compatible.
-pub const CORAY_VERSION_MINOR: u32 = 2;
+pub const CORAY_VERSION_MINOR: u32 = 3;
 /// Patch version: fixes only.
 pub const CORAY_VERSION_PATCH: u32 = 0;
 
@@ -173,6 +175,6 @@ mod tests {
             super::CORAY_VERSION_PATCH
         );
         assert_eq!(v, want);
-        assert_eq!(super::coray_version(), 1 << 16 | 2 << 8);
+        assert_eq!(super::coray_version(), 1 << 16 | 3 << 8);
     }
 }

@@ -74,6 +74,35 @@ fn kd(s: &CorayScene) -> (Vec<Block>, CorayKdTree) {
     }
 }
 
+/// A wide hierarchy over `s`, opened.
+fn wide(s: &CorayScene) -> (Vec<Block>, CorayWide) {
+    let p = coray_wide_params_default();
+    let mut r = requirements();
+    unsafe {
+        assert_eq!(coray_wide_requirements(2, &p, &mut r), CorayStatus::Ok);
+        let mut a = arena(r.arena_bytes);
+        let mut sc = arena(r.scratch_bytes);
+        assert_eq!(
+            coray_wide_build(
+                s,
+                &p,
+                a.as_mut_ptr().cast(),
+                r.arena_bytes,
+                sc.as_mut_ptr().cast(),
+                r.scratch_bytes,
+                core::ptr::null_mut()
+            ),
+            CorayStatus::Ok
+        );
+        let mut h = CorayWide { opaque: [0; 32] };
+        assert_eq!(
+            coray_wide_open(a.as_ptr().cast(), r.arena_bytes, s, &mut h),
+            CorayStatus::Ok
+        );
+        (a, h)
+    }
+}
+
 fn down() -> CorayRay {
     CorayRay {
         org: [0.5, 3.0, 0.5],
@@ -189,6 +218,17 @@ fn zero_rays_need_no_stack() {
         );
         let st = coray_bvh_intersect(
             &h,
+            core::ptr::null(),
+            core::ptr::null_mut(),
+            0,
+            null,
+            0,
+            core::ptr::null_mut(),
+        );
+        assert_eq!(st, CorayStatus::Ok);
+        let (_w, wh) = wide(&s);
+        let st = coray_wide_occluded(
+            &wh,
             core::ptr::null(),
             core::ptr::null_mut(),
             0,
@@ -359,12 +399,17 @@ fn built_arenas_are_a_function_of_scene_and_parameters() {
                     assert_eq!(coray_bvh_requirements(2, &p, &mut r), CorayStatus::Ok);
                     (r.arena_bytes, r.scratch_bytes)
                 }
-                _ => {
+                3 => {
                     let p = coray_proj_params_default(
                         CORAY_PROJ_CRITERIA_2D,
                         CORAY_BVH_BUILDER_NN_CHAIN,
                     );
                     assert_eq!(coray_proj_requirements(2, &p, &mut r), CorayStatus::Ok);
+                    (r.arena_bytes, r.scratch_bytes)
+                }
+                _ => {
+                    let p = coray_wide_params_default();
+                    assert_eq!(coray_wide_requirements(2, &p, &mut r), CorayStatus::Ok);
                     (r.arena_bytes, r.scratch_bytes)
                 }
             };
@@ -406,6 +451,15 @@ fn built_arenas_are_a_function_of_scene_and_parameters() {
                     scratch,
                     null,
                 ),
+                4 => coray_wide_build(
+                    &s,
+                    &coray_wide_params_default(),
+                    ap,
+                    bytes,
+                    sp,
+                    scratch,
+                    null,
+                ),
                 _ => {
                     let mut cam_plane = CorayProjPlane {
                         struct_size: size_of::<CorayProjPlane>(),
@@ -426,7 +480,7 @@ fn built_arenas_are_a_function_of_scene_and_parameters() {
             a.iter().flat_map(|b| b.0).collect()
         }
     };
-    for family in 0..4 {
+    for family in 0..5 {
         assert!(
             build(0x00, family) == build(0xA5, family),
             "family {family}"
@@ -796,6 +850,37 @@ fn the_bvh_one_ray_calls_refuse_what_the_array_calls_refuse() {
 }
 
 #[test]
+fn the_wide_one_ray_calls_refuse_what_the_array_calls_refuse() {
+    let open = |s: &CorayScene| {
+        let (a, h) = wide(s);
+        (a, h.opaque)
+    };
+    let calls: [(&str, usize, Trace); 4] = [
+        (
+            "intersect1",
+            size_of::<CorayHit>(),
+            |h, r, o, s, st| unsafe {
+                coray_wide_intersect1(h.cast(), r, o.cast(), s.cast(), BVH_STACK, st)
+            },
+        ),
+        (
+            "intersect",
+            size_of::<CorayHit>(),
+            |h, r, o, s, st| unsafe {
+                coray_wide_intersect(h.cast(), r, o.cast(), 1, s.cast(), BVH_STACK, st)
+            },
+        ),
+        ("occluded1", 1, |h, r, o, s, st| unsafe {
+            coray_wide_occluded1(h.cast(), r, o, s.cast(), BVH_STACK, st)
+        }),
+        ("occluded", 1, |h, r, o, s, st| unsafe {
+            coray_wide_occluded(h.cast(), r, o, 1, s.cast(), BVH_STACK, st)
+        }),
+    ];
+    one_ray_parity("wide", open, down(), calls);
+}
+
+#[test]
 fn the_proj_one_ray_calls_refuse_what_the_array_calls_refuse() {
     let open = |s: &CorayScene| unsafe {
         let mut plane = CorayProjPlane {
@@ -914,6 +999,119 @@ fn the_proj_one_ray_calls_refuse_what_the_array_calls_refuse() {
         assert_eq!(
             coray_proj_intersect1(hp, 77, &ray, &mut hit, sp, BVH_STACK, none),
             CorayStatus::InvalidParameter
+        );
+    }
+}
+
+/// The wide hierarchy's statuses: a bad leaf size, arenas and scratch too
+/// small (with the size needed), another scene, a damaged header, a
+/// damaged node, a short stack.
+#[test]
+fn wide_statuses() {
+    let f = floor();
+    let s = scene(&f);
+    let null = core::ptr::null_mut::<c_void>();
+    unsafe {
+        let bad = CorayWideParams {
+            leaf_size: 0,
+            ..coray_wide_params_default()
+        };
+        let mut r = requirements();
+        assert_eq!(
+            coray_wide_requirements(2, &bad, &mut r),
+            CorayStatus::InvalidParameter
+        );
+        let p = coray_wide_params_default();
+        assert_eq!(coray_wide_requirements(2, &p, &mut r), CorayStatus::Ok);
+        let mut a = arena(r.arena_bytes);
+        let mut sc = arena(r.scratch_bytes);
+        let (ap, sp) = (a.as_mut_ptr().cast::<c_void>(), sc.as_mut_ptr().cast());
+        let mut needed = 0usize;
+        for (ab, sb, want) in [
+            (r.arena_bytes - 1, r.scratch_bytes, r.arena_bytes),
+            (r.arena_bytes, r.scratch_bytes - 1, r.scratch_bytes),
+        ] {
+            needed = 0;
+            assert_eq!(
+                coray_wide_build(&s, &p, ap, ab, sp, sb, &mut needed),
+                CorayStatus::ArenaTooSmall
+            );
+            assert_eq!(needed, want);
+        }
+        assert_eq!(
+            coray_wide_build(
+                &s,
+                &bad,
+                ap,
+                r.arena_bytes,
+                sp,
+                r.scratch_bytes,
+                &mut needed
+            ),
+            CorayStatus::InvalidParameter
+        );
+        assert_eq!(
+            coray_wide_build(&s, &p, ap, r.arena_bytes, sp, r.scratch_bytes, null.cast()),
+            CorayStatus::Ok
+        );
+        // Another scene (one triangle fewer).
+        let mut other = s;
+        other.triangle_count = 1;
+        let mut h = CorayWide { opaque: [0; 32] };
+        assert_eq!(
+            coray_wide_open(ap, r.arena_bytes, &other, &mut h),
+            CorayStatus::SceneMismatch
+        );
+        assert_eq!(
+            coray_wide_open(ap, 8, &s, &mut h),
+            CorayStatus::CorruptArena
+        );
+        assert_eq!(
+            coray_wide_open(ap, r.arena_bytes, &s, &mut h),
+            CorayStatus::Ok
+        );
+        let mut info = coray_wide_info_default();
+        assert_eq!(coray_wide_info(&h, &mut info), CorayStatus::Ok);
+        assert_eq!((info.ref_count, info.node_count, info.leaf_size), (2, 1, 2));
+        let mut shape = coray_shape_default();
+        assert_eq!(coray_wide_validate(&h, &mut shape), CorayStatus::Ok);
+        // A short stack, then a damaged box: validate refuses it.
+        let mut stack = arena(info.stack_bytes);
+        let mut hit = CorayHit::default();
+        assert_eq!(
+            coray_wide_intersect1(
+                &h,
+                &down(),
+                &mut hit,
+                stack.as_mut_ptr().cast(),
+                4,
+                null.cast()
+            ),
+            CorayStatus::ArenaTooSmall
+        );
+        assert_eq!(
+            coray_wide_intersect1(
+                &h,
+                &down(),
+                &mut hit,
+                stack.as_mut_ptr().cast(),
+                info.stack_bytes,
+                null.cast()
+            ),
+            CorayStatus::Ok
+        );
+        assert_eq!(hit.t, 3.0);
+        let bytes = core::slice::from_raw_parts_mut(ap.cast::<u8>(), r.arena_bytes);
+        // The root node follows the 128-byte header; its first box's min x.
+        bytes[128..132].copy_from_slice(&1e30f32.to_le_bytes());
+        assert_eq!(
+            coray_wide_validate(&h, &mut shape),
+            CorayStatus::CorruptArena
+        );
+        bytes[0] ^= 1;
+        assert_eq!(
+            coray_wide_open(ap, r.arena_bytes, &s, &mut h),
+            CorayStatus::CorruptArena
         );
     }
 }

@@ -12,6 +12,7 @@
 //! The caller owns the traversal stack ([`WideBvh::stack_len`]).
 
 mod build;
+pub mod layout;
 mod node;
 mod traverse;
 mod validate;

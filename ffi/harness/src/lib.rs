@@ -18,6 +18,11 @@
 //!   indices out of range, short flags, repeats, jobs never run) writes the
 //!   clean build's arena, byte for byte, and refuses each misuse with a
 //!   status.
+//!
+//! The first byte picks the family (kd-tree, hierarchy, projection
+//! hierarchy, by its remainder mod 3); flag bits 4 to 7 equal to 5 pick the
+//! wide hierarchy instead (a value no corpus input had when it came, so
+//! the corpus kept its meaning).
 
 use coray::tolerance::near_tie;
 use coray_ffi::*;
@@ -234,6 +239,10 @@ pub fn run(data: &[u8]) -> Report {
     let sd = SceneData::new(&mut inp, flags & 4 != 0);
     let rays = rays(&mut inp);
     let mut rep = Report::default();
+    if flags >> 4 == WIDE_FLAGS {
+        wide(&sd, &rays, &mut inp, how, &mut rep);
+        return rep;
+    }
     match family % 3 {
         0 => kd(
             &sd,
@@ -775,6 +784,105 @@ fn bvh_trace(h: &CorayBvh, rays: &[CorayRay], stack_bytes: usize, rep: &mut Repo
             rep.note(
                 "bvh occluded1",
                 coray_bvh_occluded1(h, r, &mut o, sp, sb, core::ptr::null_mut()),
+            );
+        }
+    }
+    (hits, ones, occ, statuses)
+}
+
+/// Flag bits 4 to 7 that pick the wide hierarchy.
+pub const WIDE_FLAGS: u8 = 5;
+
+fn wide(sd: &SceneData, rays: &[CorayRay], inp: &mut Input, how: Damage, rep: &mut Report) {
+    let scene = sd.scene();
+    let params = CorayWideParams {
+        leaf_size: 1 + inp.u8() as u32 % 4,
+        ..coray_wide_params_default()
+    };
+    let mut req = requirements();
+    // SAFETY: live locals with struct_size set.
+    let s = unsafe { coray_wide_requirements(sd.prims(), &params, &mut req) };
+    if rep.note("wide requirements", s) != CorayStatus::Ok {
+        return;
+    }
+    let mut arena = blocks(req.arena_bytes);
+    let mut scratch = blocks(req.scratch_bytes);
+    // SAFETY: as for the kd build.
+    let s = unsafe {
+        coray_wide_build(
+            &scene,
+            &params,
+            arena.as_mut_ptr().cast(),
+            req.arena_bytes,
+            scratch.as_mut_ptr().cast(),
+            req.scratch_bytes,
+            core::ptr::null_mut(),
+        )
+    };
+    if rep.note("wide build", s) != CorayStatus::Ok {
+        return;
+    }
+    let clean = open_wide(&arena, req.arena_bytes, &scene).expect("a clean build opens");
+    let clean_answers = wide_trace(&clean, rays, req.stack_bytes, rep);
+    let mut bytes = as_bytes(&arena);
+    bytes.truncate(req.arena_bytes);
+    damage(&mut bytes, inp, how);
+    let bad = from_bytes(&bytes);
+    let Some(h) = open_wide(&bad, bytes.len(), &scene)
+        .map_err(|s| rep.note("wide open", s))
+        .ok()
+    else {
+        return;
+    };
+    let mut shape = coray_shape_default();
+    // SAFETY: a handle just opened, a live shape.
+    let v = unsafe { coray_wide_validate(&h, &mut shape) };
+    rep.validated = rep.note("wide validate", v) == CorayStatus::Ok;
+    let got = wide_trace(&h, rays, req.stack_bytes, rep);
+    if rep.validated {
+        compare("wide", &clean_answers, &got, rays);
+    }
+}
+
+fn open_wide(arena: &[Block], bytes: usize, scene: &CorayScene) -> Result<CorayWide, CorayStatus> {
+    let mut h = CorayWide { opaque: [0; 32] };
+    // SAFETY: arena holds at least `bytes` bytes; scene's arrays are live.
+    let s = unsafe { coray_wide_open(arena.as_ptr().cast(), bytes, scene, &mut h) };
+    if s == CorayStatus::Ok {
+        Ok(h)
+    } else {
+        Err(s)
+    }
+}
+
+fn wide_trace(h: &CorayWide, rays: &[CorayRay], stack_bytes: usize, rep: &mut Report) -> Answers {
+    let n = rays.len();
+    let mut stack = blocks(stack_bytes);
+    let (sp, sb): (*mut c_void, usize) = (stack.as_mut_ptr().cast(), stack_bytes);
+    let mut hits = vec![CorayHit::default(); n];
+    let mut ones = vec![CorayHit::default(); n];
+    let mut occ = vec![0u8; n];
+    let mut stats = coray_trace_stats_default();
+    let mut statuses = [CorayStatus::Ok; 2];
+    // SAFETY: every buffer is live and as long as the count passed.
+    unsafe {
+        statuses[0] = rep.note(
+            "wide intersect",
+            coray_wide_intersect(h, rays.as_ptr(), hits.as_mut_ptr(), n, sp, sb, &mut stats),
+        );
+        statuses[1] = rep.note(
+            "wide occluded",
+            coray_wide_occluded(h, rays.as_ptr(), occ.as_mut_ptr(), n, sp, sb, &mut stats),
+        );
+        for (r, one) in rays.iter().zip(ones.iter_mut()) {
+            rep.note(
+                "wide intersect1",
+                coray_wide_intersect1(h, r, one, sp, sb, &mut stats),
+            );
+            let mut o = 0u8;
+            rep.note(
+                "wide occluded1",
+                coray_wide_occluded1(h, r, &mut o, sp, sb, core::ptr::null_mut()),
             );
         }
     }

@@ -62,7 +62,25 @@ fn generated_inputs_run_clean() {
             }
         }
     }
-    assert_eq!(runs, 30 * 8 * 6);
+    // The wide hierarchy (flag bits 4 to 7 = WIDE_FLAGS), each damage.
+    let (mut wide_validated, mut wide_traced) = (0, 0);
+    for flags in 0..8u8 {
+        for _ in 0..30 {
+            let mut data = vec![0, flags | coray_fuzz_harness::WIDE_FLAGS << 4];
+            let len = 8 + g.below(200) as usize;
+            data.extend((0..len).map(|_| g.next_u64() as u8));
+            let r = run(&data);
+            runs += 1;
+            validated += usize::from(r.validated);
+            wide_validated += usize::from(r.validated);
+            wide_traced += usize::from(r.statuses.iter().sum::<u32>() > 4);
+        }
+    }
+    assert!(
+        wide_validated > 0 && wide_validated < 240 && wide_traced > 120,
+        "wide: {wide_validated} of 240 validated, {wide_traced} traced"
+    );
+    assert_eq!(runs, 30 * 8 * 6 + 8 * 30);
     // Flips in padding and unused room leave a valid arena: both outcomes
     // are exercised.
     assert!(
