@@ -34,17 +34,25 @@ fn prim_cost(geom: u32, hit: bool, sphere_away: bool) -> u64 {
     }
 }
 
+/// A traversal stack entry with its entry distance.
+pub(crate) trait Entered: Copy {
+    /// Where the ray enters the entry's volume.
+    fn t(&self) -> f32;
+}
+
+impl Entered for BvhStackItem {
+    #[inline(always)]
+    fn t(&self) -> f32 {
+        self.t
+    }
+}
+
 /// Pushes `item` among the entries pushed since `base` (sorted far to near,
-/// so the nearest pops first).
-#[inline]
-pub(crate) fn push_nearest_last(
-    stack: &mut [BvhStackItem],
-    base: usize,
-    sp: &mut usize,
-    item: BvhStackItem,
-) {
+/// so the nearest pops first): every hierarchy's closest-hit walk.
+#[inline(always)]
+pub(crate) fn push_nearest_last<T: Entered>(stack: &mut [T], base: usize, sp: &mut usize, item: T) {
     let mut i = *sp;
-    while i > base && stack[i - 1].t < item.t {
+    while i > base && stack[i - 1].t() < item.t() {
         stack[i] = stack[i - 1];
         i -= 1;
     }

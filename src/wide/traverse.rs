@@ -10,6 +10,7 @@
 
 use super::node::{WideNode, EMPTY_SLOT, LEAF_BIT, WIDTH};
 use super::WideBvh;
+use crate::bvh::traverse::{push_nearest_last, Entered};
 use crate::geom::{Hit, PreparedRay, Ray, Scene};
 use crate::kd::traverse::tie_wins;
 use crate::TraceStats;
@@ -146,21 +147,11 @@ impl Slabs {
     }
 }
 
-/// Pushes `item` among the entries pushed since `base`, far to near.
-#[inline(always)]
-fn push_nearest_last(
-    stack: &mut [WideStackItem],
-    base: usize,
-    sp: &mut usize,
-    item: WideStackItem,
-) {
-    let mut i = *sp;
-    while i > base && stack[i - 1].t < item.t {
-        stack[i] = stack[i - 1];
-        i -= 1;
+impl Entered for WideStackItem {
+    #[inline(always)]
+    fn t(&self) -> f32 {
+        self.t
     }
-    stack[i] = item;
-    *sp += 1;
 }
 
 impl WideBvh<'_> {
@@ -241,12 +232,24 @@ impl WideBvh<'_> {
         let mut sp = 1;
         let mut budget = self.nodes.len().saturating_mul(WIDTH + 1);
         let (mut interior, mut leaves, mut boxes, mut faults) = (0u64, 0u64, 0u64, 0u64);
-        while sp > 0 {
-            sp -= 1;
-            let it = stack[sp];
-            if it.t > q.limit() {
-                continue;
-            }
+        // The nearest entry a node pushed is visited next without going
+        // through the stack (and a lone one is never written to it).
+        let mut next: Option<WideStackItem> = None;
+        loop {
+            let it = match next.take() {
+                Some(it) => it,
+                None => {
+                    if sp == 0 {
+                        break;
+                    }
+                    sp -= 1;
+                    let it = stack[sp];
+                    if it.t > q.limit() {
+                        continue;
+                    }
+                    it
+                }
+            };
             if budget == 0 {
                 faults += 1;
                 break;
@@ -281,6 +284,18 @@ impl WideBvh<'_> {
             }
             hit &= used;
             boxes += used.count_ones() as u64;
+            let item = |i: usize| WideStackItem {
+                child: n.child[i],
+                count: n.count[i],
+                t: tn[i],
+            };
+            if hit == 0 {
+                continue;
+            }
+            if hit & (hit - 1) == 0 {
+                next = Some(item(hit.trailing_zeros() as usize));
+                continue;
+            }
             if sp + WIDTH > stack.len() {
                 faults += 1;
                 break;
@@ -289,18 +304,15 @@ impl WideBvh<'_> {
             while hit != 0 {
                 let i = hit.trailing_zeros() as usize;
                 hit &= hit - 1;
-                let item = WideStackItem {
-                    child: n.child[i],
-                    count: n.count[i],
-                    t: tn[i],
-                };
                 if Q::SORTED {
-                    push_nearest_last(stack, base, &mut sp, item);
+                    push_nearest_last(stack, base, &mut sp, item(i));
                 } else {
-                    stack[sp] = item;
+                    stack[sp] = item(i);
                     sp += 1;
                 }
             }
+            sp -= 1;
+            next = Some(stack[sp]);
         }
         stats.traversal_steps += interior + leaves;
         stats.interior_steps += interior;

@@ -120,38 +120,16 @@ fn coray_matches_embree_on_a_million_rays() {
         let tree = owned.tree(scene).unwrap();
         tree.validate().unwrap();
         for method in [Traversal::Hierarchical, Traversal::Ropes] {
-            let (mut hits, mut same_t, mut graze, mut bad, mut bad_any) = (0, 0, 0, 0, 0);
-            let mut st = TraceStats::default();
-            let mut stk = stack(KD_STACK_LEN);
-            for (i, r) in rays.iter().enumerate() {
-                let a = tree.intersect(r, method, &mut stk, &mut st);
-                let b = &reference[i];
-                hits += a.is_hit() as usize;
-                let any = tree.occluded(r, method, &mut stk, &mut st);
-                assert_eq!(any, a.is_hit(), "occluded and intersect disagree in coray");
-                if any != reference_any[i] && !(grazing(r, &a) || grazing(r, b)) {
-                    bad_any += 1;
-                }
-                match classify(r, &a, b) {
-                    Agreement::Same => {}
-                    Agreement::TieSameDistance => same_t += 1,
-                    Agreement::TieGrazing => graze += 1,
-                    Agreement::Mismatch => {
-                        bad += 1;
-                        if bad <= 10 {
-                            println!("{name}/{method:?} disagreement on ray {i} {r:?}: coray {a:?}, embree {b:?}");
-                        }
-                    }
-                }
-            }
-            println!(
-                "{name}/{method:?}: {} rays, {hits} hits, {same_t} same-distance ties, {graze} grazing ties, \
-                 {bad} disagreements, {bad_any} any-hit disagreements",
-                rays.len()
+            // A stack for each closure.
+            let (mut s1, mut s2) = (stack(KD_STACK_LEN), stack(KD_STACK_LEN));
+            cross_check(
+                &format!("{name}/{method:?}"),
+                &rays,
+                &reference,
+                &reference_any,
+                |r, st| tree.intersect(r, method, &mut s1, st),
+                |r, st| tree.occluded(r, method, &mut s2, st),
             );
-            assert!(hits > rays.len() / 4);
-            assert_eq!(bad, 0);
-            assert_eq!(bad_any, 0);
         }
     }
 
@@ -160,40 +138,62 @@ fn coray_matches_embree_on_a_million_rays() {
         let owned = OwnedWide::new(&scene, leaf).unwrap();
         let w = owned.view(scene).unwrap();
         w.validate().unwrap();
-        let (mut hits, mut same_t, mut graze, mut bad, mut bad_any) = (0, 0, 0, 0, 0);
-        let mut st = TraceStats::default();
-        let mut stk = stack::<WideStackItem>(w.stack_len());
-        for (i, r) in rays.iter().enumerate() {
-            let a = w.intersect(r, &mut stk, &mut st);
-            let b = &reference[i];
-            hits += a.is_hit() as usize;
-            let any = w.occluded(r, &mut stk, &mut st);
-            assert_eq!(any, a.is_hit(), "occluded and intersect disagree in coray");
-            if any != reference_any[i] && !(grazing(r, &a) || grazing(r, b)) {
-                bad_any += 1;
-            }
-            match classify(r, &a, b) {
-                Agreement::Same => {}
-                Agreement::TieSameDistance => same_t += 1,
-                Agreement::TieGrazing => graze += 1,
-                Agreement::Mismatch => {
-                    bad += 1;
-                    if bad <= 10 {
-                        println!("wide leaf {leaf} disagreement on ray {i} {r:?}: coray {a:?}, embree {b:?}");
-                    }
+        let mut s1 = stack::<WideStackItem>(w.stack_len());
+        let mut s2 = s1.clone();
+        cross_check(
+            &format!("wide leaf {leaf}"),
+            &rays,
+            &reference,
+            &reference_any,
+            |r, st| w.intersect(r, &mut s1, st),
+            |r, st| w.occluded(r, &mut s2, st),
+        );
+    }
+}
+
+/// One structure's answers against Embree's on every ray: closest hits
+/// equal but for documented ties, any-hit answers equal but for grazing
+/// rays, no faults; prints the tally.
+fn cross_check(
+    what: &str,
+    rays: &[Ray],
+    reference: &[Hit],
+    reference_any: &[bool],
+    mut intersect: impl FnMut(&Ray, &mut TraceStats) -> Hit,
+    mut occluded: impl FnMut(&Ray, &mut TraceStats) -> bool,
+) {
+    let (mut hits, mut same_t, mut graze, mut bad, mut bad_any) = (0, 0, 0, 0, 0);
+    let mut st = TraceStats::default();
+    for (i, r) in rays.iter().enumerate() {
+        let a = intersect(r, &mut st);
+        let b = &reference[i];
+        hits += a.is_hit() as usize;
+        let any = occluded(r, &mut st);
+        assert_eq!(any, a.is_hit(), "occluded and intersect disagree in coray");
+        if any != reference_any[i] && !(grazing(r, &a) || grazing(r, b)) {
+            bad_any += 1;
+        }
+        match classify(r, &a, b) {
+            Agreement::Same => {}
+            Agreement::TieSameDistance => same_t += 1,
+            Agreement::TieGrazing => graze += 1,
+            Agreement::Mismatch => {
+                bad += 1;
+                if bad <= 10 {
+                    println!("{what} disagreement on ray {i} {r:?}: coray {a:?}, embree {b:?}");
                 }
             }
         }
-        println!(
-            "wide leaf {leaf}: {} rays, {hits} hits, {same_t} same-distance ties, {graze} grazing ties, \
-             {bad} disagreements, {bad_any} any-hit disagreements",
-            rays.len()
-        );
-        assert_eq!(st.faults, 0);
-        assert!(hits > rays.len() / 4);
-        assert_eq!(bad, 0);
-        assert_eq!(bad_any, 0);
     }
+    println!(
+        "{what}: {} rays, {hits} hits, {same_t} same-distance ties, {graze} grazing ties, \
+         {bad} disagreements, {bad_any} any-hit disagreements",
+        rays.len()
+    );
+    assert_eq!(st.faults, 0);
+    assert!(hits > rays.len() / 4);
+    assert_eq!(bad, 0);
+    assert_eq!(bad_any, 0);
 }
 
 /// Documents why the cross-check uses unit directions: Embree 3.13's linear

@@ -756,7 +756,45 @@ fn bvh_validate(h: &CorayBvh, stack_bytes: usize, rep: &mut Report) -> CorayStat
     rep.note("bvh validate", s)
 }
 
-fn bvh_trace(h: &CorayBvh, rays: &[CorayRay], stack_bytes: usize, rep: &mut Report) -> Answers {
+/// The entry points one trace of a family makes on a handle `H`.
+struct TraceCalls<H> {
+    intersect: ArrayCall<H, CorayHit>,
+    occluded: ArrayCall<H, u8>,
+    intersect1: OneCall<H, CorayHit>,
+    occluded1: OneCall<H, u8>,
+}
+
+/// An array trace call: handle, rays, answers, count, stack, its bytes, stats.
+type ArrayCall<H, O> = unsafe extern "C" fn(
+    *const H,
+    *const CorayRay,
+    *mut O,
+    usize,
+    *mut c_void,
+    usize,
+    *mut CorayTraceStats,
+) -> CorayStatus;
+
+/// A one-ray trace call: handle, ray, answer, stack, its bytes, stats.
+type OneCall<H, O> = unsafe extern "C" fn(
+    *const H,
+    *const CorayRay,
+    *mut O,
+    *mut c_void,
+    usize,
+    *mut CorayTraceStats,
+) -> CorayStatus;
+
+/// [`Answers`] of every trace call of a family on `rays`, with a stack of
+/// `stack_bytes`.
+fn trace_answers<H>(
+    family: &str,
+    h: &H,
+    rays: &[CorayRay],
+    stack_bytes: usize,
+    rep: &mut Report,
+    calls: TraceCalls<H>,
+) -> Answers {
     let n = rays.len();
     let mut stack = blocks(stack_bytes);
     let (sp, sb): (*mut c_void, usize) = (stack.as_mut_ptr().cast(), stack_bytes);
@@ -765,29 +803,40 @@ fn bvh_trace(h: &CorayBvh, rays: &[CorayRay], stack_bytes: usize, rep: &mut Repo
     let mut occ = vec![0u8; n];
     let mut stats = coray_trace_stats_default();
     let mut statuses = [CorayStatus::Ok; 2];
+    let what = |call: &str| format!("{family} {call}");
     // SAFETY: every buffer is live and as long as the count passed.
     unsafe {
         statuses[0] = rep.note(
-            "bvh intersect",
-            coray_bvh_intersect(h, rays.as_ptr(), hits.as_mut_ptr(), n, sp, sb, &mut stats),
+            &what("intersect"),
+            (calls.intersect)(h, rays.as_ptr(), hits.as_mut_ptr(), n, sp, sb, &mut stats),
         );
         statuses[1] = rep.note(
-            "bvh occluded",
-            coray_bvh_occluded(h, rays.as_ptr(), occ.as_mut_ptr(), n, sp, sb, &mut stats),
+            &what("occluded"),
+            (calls.occluded)(h, rays.as_ptr(), occ.as_mut_ptr(), n, sp, sb, &mut stats),
         );
         for (r, one) in rays.iter().zip(ones.iter_mut()) {
             rep.note(
-                "bvh intersect1",
-                coray_bvh_intersect1(h, r, one, sp, sb, &mut stats),
+                &what("intersect1"),
+                (calls.intersect1)(h, r, one, sp, sb, &mut stats),
             );
             let mut o = 0u8;
             rep.note(
-                "bvh occluded1",
-                coray_bvh_occluded1(h, r, &mut o, sp, sb, core::ptr::null_mut()),
+                &what("occluded1"),
+                (calls.occluded1)(h, r, &mut o, sp, sb, core::ptr::null_mut()),
             );
         }
     }
     (hits, ones, occ, statuses)
+}
+
+fn bvh_trace(h: &CorayBvh, rays: &[CorayRay], stack_bytes: usize, rep: &mut Report) -> Answers {
+    let calls = TraceCalls {
+        intersect: coray_bvh_intersect,
+        occluded: coray_bvh_occluded,
+        intersect1: coray_bvh_intersect1,
+        occluded1: coray_bvh_occluded1,
+    };
+    trace_answers("bvh", h, rays, stack_bytes, rep, calls)
 }
 
 /// Flag bits 4 to 7 that pick the wide hierarchy.
@@ -856,37 +905,13 @@ fn open_wide(arena: &[Block], bytes: usize, scene: &CorayScene) -> Result<CorayW
 }
 
 fn wide_trace(h: &CorayWide, rays: &[CorayRay], stack_bytes: usize, rep: &mut Report) -> Answers {
-    let n = rays.len();
-    let mut stack = blocks(stack_bytes);
-    let (sp, sb): (*mut c_void, usize) = (stack.as_mut_ptr().cast(), stack_bytes);
-    let mut hits = vec![CorayHit::default(); n];
-    let mut ones = vec![CorayHit::default(); n];
-    let mut occ = vec![0u8; n];
-    let mut stats = coray_trace_stats_default();
-    let mut statuses = [CorayStatus::Ok; 2];
-    // SAFETY: every buffer is live and as long as the count passed.
-    unsafe {
-        statuses[0] = rep.note(
-            "wide intersect",
-            coray_wide_intersect(h, rays.as_ptr(), hits.as_mut_ptr(), n, sp, sb, &mut stats),
-        );
-        statuses[1] = rep.note(
-            "wide occluded",
-            coray_wide_occluded(h, rays.as_ptr(), occ.as_mut_ptr(), n, sp, sb, &mut stats),
-        );
-        for (r, one) in rays.iter().zip(ones.iter_mut()) {
-            rep.note(
-                "wide intersect1",
-                coray_wide_intersect1(h, r, one, sp, sb, &mut stats),
-            );
-            let mut o = 0u8;
-            rep.note(
-                "wide occluded1",
-                coray_wide_occluded1(h, r, &mut o, sp, sb, core::ptr::null_mut()),
-            );
-        }
-    }
-    (hits, ones, occ, statuses)
+    let calls = TraceCalls {
+        intersect: coray_wide_intersect,
+        occluded: coray_wide_occluded,
+        intersect1: coray_wide_intersect1,
+        occluded1: coray_wide_occluded1,
+    };
+    trace_answers("wide", h, rays, stack_bytes, rep, calls)
 }
 
 fn proj(
