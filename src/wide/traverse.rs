@@ -137,10 +137,10 @@ impl Slabs {
                 } else {
                     let l = (n.min[a][i] - o) * inv;
                     let h = (n.max[a][i] - o) * inv;
-                    (l.min(h), l.max(h))
+                    (fmin(l, h), fmax(l, h))
                 };
-                tn[i] = tn[i].max(near);
-                tf[i] = tf[i].min(far * FAR_SLACK);
+                tn[i] = fmax(near, tn[i]);
+                tf[i] = fmin(far * FAR_SLACK, tf[i]);
             }
         }
         (tn, tf)
@@ -319,5 +319,25 @@ impl WideBvh<'_> {
         stats.leaf_steps += leaves;
         stats.box_tests += boxes;
         stats.faults += (faults > 0) as u64;
+    }
+}
+
+/// `a < b ? a : b`: one `minps` lane (the second operand when either is NaN).
+#[inline(always)]
+fn fmin(a: f32, b: f32) -> f32 {
+    if a < b {
+        a
+    } else {
+        b
+    }
+}
+
+/// `a > b ? a : b`: one `maxps` lane (the second operand when either is NaN).
+#[inline(always)]
+fn fmax(a: f32, b: f32) -> f32 {
+    if a > b {
+        a
+    } else {
+        b
     }
 }
