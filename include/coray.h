@@ -1218,7 +1218,9 @@ enum CorayStatus coray_wide_requirements(size_t prim_count,
 // `CORAY_STATUS_ARENA_TOO_SMALL`, `*needed_bytes` (if not NULL) receives
 // the size the arena or scratch that was too small needs. Degenerate
 // primitives stay out (never hit). The part of the arena the layout
-// covers is written entirely; bytes past it are not touched.
+// covers is written entirely (zeros past the tree); bytes past it are not
+// touched. The tree ends at `CorayWideInfo.arena_bytes_used` (about a
+// quarter of the node room is used): only those bytes need be kept.
 //
 // Safety: every pointer is NULL or valid for its documented size; the
 // arenas are not read or written by anyone else during the call.

@@ -154,7 +154,9 @@ pub unsafe extern "C" fn coray_wide_requirements(
 /// `CORAY_STATUS_ARENA_TOO_SMALL`, `*needed_bytes` (if not NULL) receives
 /// the size the arena or scratch that was too small needs. Degenerate
 /// primitives stay out (never hit). The part of the arena the layout
-/// covers is written entirely; bytes past it are not touched.
+/// covers is written entirely (zeros past the tree); bytes past it are not
+/// touched. The tree ends at `CorayWideInfo.arena_bytes_used` (about a
+/// quarter of the node room is used): only those bytes need be kept.
 ///
 /// Safety: every pointer is NULL or valid for its documented size; the
 /// arenas are not read or written by anyone else during the call.
@@ -217,14 +219,19 @@ pub unsafe extern "C" fn coray_wide_build(
             links,
         };
         let w = wide::build(&scene, leaf_size, storage, scratch)?;
+        // The nodes come last: the arena the tree needs is the prefix up
+        // to its last node, and the header records that layout.
+        let info = *w.info();
+        let used = WideArenaLayout::of(info.node_count as usize, arena_l.refs)
+            .ok_or(CorayStatus::TooManyPrimitives)?;
         header[0] = WideArenaHeader {
             magic: WIDE_MAGIC,
             version: WIDE_VERSION,
             scene_counts: scene_counts(&scene),
-            info: *w.info(),
-            layout_bytes: arena_l.total_bytes as u32,
-            nodes_cap: arena_l.nodes as u32,
-            refs_cap: arena_l.refs as u32,
+            info,
+            layout_bytes: used.total_bytes as u32,
+            nodes_cap: used.nodes as u32,
+            refs_cap: used.refs as u32,
         };
         Ok(())
     })

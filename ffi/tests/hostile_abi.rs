@@ -1075,6 +1075,26 @@ fn wide_statuses() {
         assert_eq!((info.ref_count, info.node_count, info.leaf_size), (2, 1, 2));
         let mut shape = coray_shape_default();
         assert_eq!(coray_wide_validate(&h, &mut shape), CorayStatus::Ok);
+        // The tree is a prefix of the arena: those bytes alone open, and
+        // one byte fewer does not.
+        assert!(info.arena_bytes_used <= r.arena_bytes);
+        let mut kept = arena(info.arena_bytes_used);
+        core::ptr::copy_nonoverlapping(
+            ap.cast::<u8>(),
+            kept.as_mut_ptr().cast::<u8>(),
+            info.arena_bytes_used,
+        );
+        let mut hk = CorayWide { opaque: [0; 32] };
+        let kp = kept.as_ptr().cast::<c_void>();
+        assert_eq!(
+            coray_wide_open(kp, info.arena_bytes_used - 1, &s, &mut hk),
+            CorayStatus::CorruptArena
+        );
+        assert_eq!(
+            coray_wide_open(kp, info.arena_bytes_used, &s, &mut hk),
+            CorayStatus::Ok
+        );
+        assert_eq!(coray_wide_validate(&hk, &mut shape), CorayStatus::Ok);
         // A short stack, then a damaged box: validate refuses it.
         let mut stack = arena(info.stack_bytes);
         let mut hit = CorayHit::default();

@@ -1,6 +1,13 @@
-//! Byte layouts of wide hierarchy arenas: `[WideArenaHeader | nodes |
-//! refs]`, and `[boxes | keys | links | binary nodes]` for the build's
+//! Byte layouts of wide hierarchy arenas: `[WideArenaHeader | refs |
+//! nodes]`, and `[boxes | keys | links | binary nodes]` for the build's
 //! scratch. Counts in, bytes out, checked ([`crate::arena::Parts`]).
+//!
+//! The nodes come last because their count is known only after the build
+//! (the requirements bound it at one per primitive; builds use about a
+//! quarter of that): a build records its own node count as the capacity,
+//! so the arena it needs is a prefix of the one it was given, and a
+//! caller may keep only those bytes (`WideArenaLayout::total_bytes` of
+//! the recorded counts).
 
 use super::{WideInfo, WideNode, WideRequirements};
 use crate::arena::Parts;
@@ -37,8 +44,8 @@ impl WideArenaLayout {
     pub fn of(nodes: usize, refs: usize) -> Option<WideArenaLayout> {
         const _: () = assert!(size_of::<WideArenaHeader>() <= WIDE_HEADER_BYTES);
         let mut p = Parts::after(WIDE_HEADER_BYTES);
-        let nodes_offset = p.push::<WideNode>(nodes)?;
         let refs_offset = p.push::<u32>(refs)?;
+        let nodes_offset = p.push::<WideNode>(nodes)?;
         Some(WideArenaLayout {
             nodes,
             refs,
@@ -140,9 +147,17 @@ mod tests {
     #[test]
     fn layouts_are_checked_and_aligned() {
         let l = WideArenaLayout::of(3, 5).unwrap();
-        assert_eq!(l.nodes_offset, WIDE_HEADER_BYTES);
-        assert_eq!(l.refs_offset, WIDE_HEADER_BYTES + 3 * 128);
-        assert_eq!(l.total_bytes, l.refs_offset + 32);
+        assert_eq!(l.refs_offset, WIDE_HEADER_BYTES);
+        // The references (20 bytes) padded to the nodes' 16-byte alignment.
+        assert_eq!(l.nodes_offset, WIDE_HEADER_BYTES + 32);
+        assert_eq!(l.total_bytes, l.nodes_offset + 3 * 128);
+        // Fewer nodes: a prefix of the same arena.
+        let fewer = WideArenaLayout::of(1, 5).unwrap();
+        assert_eq!(
+            (fewer.refs_offset, fewer.nodes_offset),
+            (l.refs_offset, l.nodes_offset)
+        );
+        assert_eq!(fewer.total_bytes, l.total_bytes - 2 * 128);
         assert!(WideArenaLayout::of(usize::MAX / 256, 1).is_none());
         let mut h = WideArenaHeader {
             magic: WIDE_MAGIC,

@@ -9,7 +9,7 @@
 //! (coray's build jobs on N threads).
 
 use crate::method::Preset;
-use coray::owned::{OwnedBvh, OwnedKd};
+use coray::owned::{OwnedBvh, OwnedKd, OwnedWide};
 use coray::Scene;
 use serde::Serialize;
 use std::time::Instant;
@@ -17,7 +17,7 @@ use std::time::Instant;
 /// One builder on one scene.
 #[derive(Clone, Debug, Serialize)]
 pub struct BuildCell {
-    /// The builder: kd-auto, kd-paper, tdbs-sah, embree (threads).
+    /// The builder: kd-auto, kd-paper, tdbs-sah, wide, embree (threads).
     pub builder: String,
     /// Best build time (ms).
     pub ms: f64,
@@ -85,6 +85,27 @@ fn tdbs_sah(scene: &Scene) -> Result<BuildCell, String> {
     })
 }
 
+fn wide(scene: &Scene) -> Result<BuildCell, String> {
+    let mut o = OwnedWide::with_room(scene.prim_count());
+    let t = Instant::now();
+    o.build(scene, crate::method::WIDE_LEAF_SIZE)
+        .map_err(|e| format!("wide: {e}"))?;
+    let ms = t.elapsed().as_secs_f64() * 1e3;
+    let n = scene.prim_count().max(1) as f64;
+    let req = coray::wide::requirements(scene.prim_count());
+    let scratch = coray::wide::layout::WideScratchLayout::of(&req).map_or(0, |l| l.total_bytes);
+    // The arena's node room bounds the nodes; the build uses fewer.
+    let room =
+        coray::wide::layout::WideArenaLayout::of(req.nodes, req.refs).map_or(0, |l| l.total_bytes);
+    Ok(BuildCell {
+        builder: "wide".into(),
+        ms,
+        bytes_per_prim: o.bytes() as f64 / n,
+        scratch_per_prim: (room.saturating_sub(o.bytes()) + scratch) as f64 / n,
+        truncated: false,
+    })
+}
+
 #[cfg(feature = "embree")]
 fn embree(scene: &Scene, threads: usize) -> Result<BuildCell, String> {
     let e = coray_embree::EmbreeScene::new(scene, Some(threads as u32));
@@ -111,6 +132,7 @@ pub fn run(s: &crate::scene::SceneData, repeat: usize, threads: usize) -> Result
     }
     builders.push(Box::new(|sc| kd(sc, Preset::Paper, "kd-paper", 1)));
     builders.push(Box::new(tdbs_sah));
+    builders.push(Box::new(wide));
     #[cfg(feature = "embree")]
     {
         builders.push(Box::new(|sc| embree(sc, 1)));
@@ -147,7 +169,9 @@ columns: prims = primitives after triangulation; per builder: ms = best build ti
   tree is byte for byte the one-thread build's; a build that runs out of room falls back
   to one pass on one thread); x = kd-auto's time over Embree's at one thread, xN = at N.
   kd-auto keeps no ropes (hierarchical and packet traversal need none; with ropes, for
-  rope traversal and the LCTS casts, a leaf takes 48 bytes more); kd-paper keeps them.";
+  rope traversal and the LCTS casts, a leaf takes 48 bytes more); kd-paper keeps them.
+  wide = tdbs-sah's build (leaves of 2) collapsed into 4-wide nodes; its +s holds the
+  binary hierarchy and the node room the collapse did not use.";
 
 /// Prints the rows.
 pub fn print(rows: &[BuildRow]) {
