@@ -708,7 +708,7 @@ fn build_table_has_every_builder() {
         .iter()
         .map(|c| c["builder"].as_str().unwrap())
         .collect();
-    let mut want = vec!["kd-auto", "kd-auto (2 thr)", "kd-paper", "tdbs-sah"];
+    let mut want = vec!["kd-auto", "kd-auto (2 thr)", "kd-paper", "tdbs-sah", "wide"];
     if cfg!(feature = "embree") {
         want.extend(["embree (1 thr)", "embree (2 thr)"]);
     }
@@ -723,6 +723,10 @@ fn build_table_has_every_builder() {
     let cells = rows[0]["cells"].as_array().unwrap();
     assert!(cells[0]["scratch_per_prim"].as_f64().unwrap() > 0.0);
     assert_eq!(cells[3]["scratch_per_prim"], 60.0);
+    // The wide hierarchy keeps less than the binary one it is collapsed
+    // from (nodes of four entries, leaves of two).
+    let kept = |i: usize| cells[i]["bytes_per_prim"].as_f64().unwrap();
+    assert!(kept(4) < kept(3), "wide {} tdbs-sah {}", kept(4), kept(3));
     // The build's jobs on two threads make the same tree.
     for row in rows {
         let c = row["cells"].as_array().unwrap();
