@@ -499,8 +499,9 @@ typedef uint32_t CorayProjScheme;
 typedef struct CorayWideParams {
   // `sizeof(CorayWideParams)`.
   size_t struct_size;
-  // Most primitives per leaf entry (at least 1; default 2, the fastest
-  // measured on incoherent rays).
+  // Most primitives per leaf entry (at least 1; default 4, the fastest
+  // measured on incoherent rays); below it the surface area heuristic
+  // decides whether a node splits.
   uint32_t leaf_size;
 } CorayWideParams;
 
@@ -1194,7 +1195,7 @@ enum CorayStatus coray_proj_occluded1(const struct CorayProj *proj,
                                       size_t stack_bytes,
                                       struct CorayTraceStats *stats);
 
-// Default parameters (leaves of 2) with `struct_size` set.
+// Default parameters (leaves of up to 4) with `struct_size` set.
 struct CorayWideParams coray_wide_params_default(void);
 
 // A `CorayWideInfo` to fill, `struct_size` set.

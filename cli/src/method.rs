@@ -44,9 +44,10 @@ impl Preset {
     }
 }
 
-/// Leaf size of the `wide` method: two primitives a leaf entry measured
-/// fastest on incoherent rays (bench's speed table, SPD scenes).
-pub const WIDE_LEAF_SIZE: u32 = 2;
+/// Most primitives a leaf entry of the `wide` method holds (the surface
+/// area heuristic decides below it): measured fastest on incoherent and
+/// diffuse rays (bench's speed table, SPD scenes), as the C default.
+pub const WIDE_LEAF_SIZE: u32 = 4;
 
 /// The hierarchy builders by name.
 pub const BVH_NAMES: [(&str, BvhBuild); 7] = [

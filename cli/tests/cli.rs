@@ -724,7 +724,7 @@ fn build_table_has_every_builder() {
     assert!(cells[0]["scratch_per_prim"].as_f64().unwrap() > 0.0);
     assert_eq!(cells[3]["scratch_per_prim"], 60.0);
     // The wide hierarchy keeps less than the binary one it is collapsed
-    // from (nodes of four entries, leaves of two).
+    // from (nodes of four entries, leaves of up to four).
     let kept = |i: usize| cells[i]["bytes_per_prim"].as_f64().unwrap();
     assert!(kept(4) < kept(3), "wide {} tdbs-sah {}", kept(4), kept(3));
     // The build's jobs on two threads make the same tree.

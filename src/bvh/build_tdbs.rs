@@ -50,11 +50,26 @@ pub(crate) fn links_needed(n: usize) -> usize {
     n.saturating_mul(8)
 }
 
+/// When a node becomes a leaf.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum LeafRule {
+    /// At `leaf_size` primitives or fewer (the thesis' builders).
+    Size,
+    /// At `leaf_size` or fewer, when the surface area heuristic prices the
+    /// leaf at most as the best split: a split costs `traversal` (in
+    /// primitive tests) over the node's area, plus its children's tests.
+    Sah {
+        /// A traversal step's cost in primitive tests.
+        traversal: f64,
+    },
+}
+
 pub(crate) fn build<'a>(
     scene: &Scene<'a>,
     source: Option<&[Aabb]>,
     builder: Builder,
     leaf_size: u32,
+    rule: LeafRule,
     storage: BvhStorage<'a>,
     scratch: BvhScratch,
 ) -> Result<Bvh<'a>, Error> {
@@ -110,7 +125,8 @@ pub(crate) fn build<'a>(
         let nd = nodes[i];
         let (first, count) = (nd.first as usize, nd.len() as usize);
         let d = level.get(pair(i)).copied().unwrap_or(0);
-        if count <= leaf_size as usize {
+        let small = count <= leaf_size as usize;
+        if small && (count < 2 || rule == LeafRule::Size) {
             depth = depth.max(d);
             i += 1;
             continue;
@@ -127,7 +143,17 @@ pub(crate) fn build<'a>(
                 &mut best,
             );
         }
-        let (_, axis, k) = best.expect("count >= 2");
+        let (c, axis, k) = best.expect("count >= 2");
+        if let (true, LeafRule::Sah { traversal }) = (small, rule) {
+            // The sweep's criterion is A_L n_L + A_R n_R: the split's
+            // tests in units of the node's area times one test.
+            let a = area(&nd.bounds());
+            if c + traversal * a >= a * count as f64 {
+                depth = depth.max(d);
+                i += 1;
+                continue;
+            }
+        }
         let run = &order[axis][first..first + count];
         // The run as the split axis orders it: the references a child
         // keeps if it stays a leaf.
@@ -378,6 +404,7 @@ mod tests {
                     None,
                     builder,
                     leaf_size,
+                    LeafRule::Size,
                     BvhStorage {
                         nodes: na,
                         refs: ra,
@@ -415,5 +442,60 @@ mod tests {
                 assert!(a.info().node_count as usize > N / leaf_size as usize);
             }
         }
+    }
+
+    /// The SAH leaf rule: a traversal step priced beyond any split gives
+    /// the size rule's tree; one that costs nothing splits every node of
+    /// separate primitives down to one (their split halves the tests).
+    #[test]
+    fn sah_leaf_rule_between_its_limits() {
+        const N: usize = 40;
+        let mut vertices = [[0.0f32; 3]; 3 * N];
+        let mut triangles = [[0u32; 3]; N];
+        for i in 0..N {
+            let x = ((i * 7) % N) as f32 * 3.0;
+            vertices[3 * i] = [x, 0.0, 0.0];
+            vertices[3 * i + 1] = [x + 1.0, 0.0, 0.0];
+            vertices[3 * i + 2] = [x, 1.0, (i % 5) as f32];
+            triangles[i] = [3 * i as u32, 3 * i as u32 + 1, 3 * i as u32 + 2];
+        }
+        let scene = Scene {
+            vertices: &vertices,
+            triangles: &triangles,
+            spheres: &[],
+            cones: &[],
+        };
+        let run = |rule: LeafRule, leaf_size: u32| {
+            let mut nodes = [BvhNode::default(); 2 * N];
+            let mut refs = [0u32; N];
+            let mut boxes = [Aabb::EMPTY; N];
+            let mut keys = [0.0f32; N];
+            let mut links = [0u32; 8 * N];
+            let b = build(
+                &scene,
+                None,
+                Builder::TdbsSah,
+                leaf_size,
+                rule,
+                BvhStorage {
+                    nodes: &mut nodes,
+                    refs: &mut refs,
+                },
+                BvhScratch {
+                    boxes: &mut boxes,
+                    keys: &mut keys,
+                    links: &mut links,
+                    clusters: &mut [],
+                },
+            )
+            .unwrap();
+            let (n, r) = b.parts();
+            (*b.info(), n.to_vec(), r.to_vec())
+        };
+        let size = run(LeafRule::Size, 4);
+        assert_eq!(size, run(LeafRule::Sah { traversal: 1e30 }, 4));
+        let (free, _, _) = run(LeafRule::Sah { traversal: 0.0 }, 4);
+        assert_eq!(free.leaf_count as usize, N);
+        assert!(size.0.leaf_count < free.leaf_count);
     }
 }

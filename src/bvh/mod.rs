@@ -48,6 +48,29 @@ pub enum Builder {
     NnChain,
 }
 
+/// The TDBS-SAH hierarchy whose nodes of `leaf_size` primitives or fewer
+/// become leaves only where the surface area heuristic prices a leaf at
+/// most as the best split (a traversal step costing `traversal` primitive
+/// tests): the binary hierarchy the wide one is collapsed from. Storage
+/// and scratch as [`build`] with [`Builder::TdbsSah`].
+pub(crate) fn build_sah_leaves<'a>(
+    scene: &Scene<'a>,
+    leaf_size: u32,
+    traversal: f64,
+    storage: BvhStorage<'a>,
+    scratch: BvhScratch,
+) -> Result<Bvh<'a>, Error> {
+    build_tdbs::build(
+        scene,
+        None,
+        Builder::TdbsSah,
+        leaf_size,
+        build_tdbs::LeafRule::Sah { traversal },
+        storage,
+        scratch,
+    )
+}
+
 /// Storage of a static hierarchy over `n` primitives: `2n - 1` nodes,
 /// `n` references, and build scratch of `n` of each scratch kind it uses
 /// (the chain build: `3n - 1` boxes, for its kd-tree of clusters).
@@ -115,7 +138,15 @@ pub fn build_over<'a>(
     match builder {
         Builder::Nn => build_nn::build(scene, source, storage, scratch),
         Builder::NnChain => build_nn_chain::build(scene, source, storage, scratch),
-        b => build_tdbs::build(scene, source, b, leaf_size, storage, scratch),
+        b => build_tdbs::build(
+            scene,
+            source,
+            b,
+            leaf_size,
+            build_tdbs::LeafRule::Size,
+            storage,
+            scratch,
+        ),
     }
 }
 

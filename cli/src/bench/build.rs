@@ -170,7 +170,8 @@ columns: prims = primitives after triangulation; per builder: ms = best build ti
   to one pass on one thread); x = kd-auto's time over Embree's at one thread, xN = at N.
   kd-auto keeps no ropes (hierarchical and packet traversal need none; with ropes, for
   rope traversal and the LCTS casts, a leaf takes 48 bytes more); kd-paper keeps them.
-  wide = tdbs-sah's build (leaves of 2) collapsed into 4-wide nodes; its +s holds the
+  wide = tdbs-sah's build (leaves of up to 4 where the SAH prices them lower) collapsed
+  into 4-wide nodes; its +s holds the
   binary hierarchy and the node room the collapse did not use.";
 
 /// Prints the rows.
