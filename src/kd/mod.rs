@@ -173,27 +173,47 @@ pub struct KdRequirements {
 
 /// The room for a tree of `prim_count` primitives that does not stop
 /// splitting for lack of space in ordinary scenes: `refs_per_prim * N`
-/// references, two leaves per reference, and event scratch for the
-/// pending subtrees plus one split's temporaries.
+/// references, [`NODES_PER_REF`] nodes per reference, and
+/// [`EVENTS_PER_REF`] events of scratch per reference.
 ///
 /// A build given less (down to [`min_requirements`]) still succeeds; it
 /// stops splitting where room runs out and sets [`KD_FLAG_TRUNCATED`]. A
 /// scene may need more than `refs_per_prim` references per primitive (the
-/// SPD gears needs 8.2 under [`KdParams::auto`]); it is then truncated too.
+/// SPD gears needs 8.2 under [`KdParams::auto`]), or more nodes per
+/// reference; it is then truncated too.
 pub fn requirements(prim_count: usize, params: &KdParams) -> KdRequirements {
     let n = prim_count.max(1);
     let refs = n * params.refs_per_prim.max(1) as usize;
-    let leaves = 2 * refs + 1;
-    let nodes = 2 * leaves - 1;
+    let nodes = refs * NODES_PER_REF.0 / NODES_PER_REF.1 + 1;
+    let leaves = nodes.div_ceil(2);
     KdRequirements {
         nodes,
         ropes: if params.ropes { leaves } else { 0 },
         rope_ids: if params.ropes { nodes } else { 0 },
         refs,
-        events: 12 * refs,
+        events: EVENTS_PER_REF * refs,
         prim_flags: prim_count,
     }
 }
+
+/// Nodes [`requirements`] asks for per reference, as a fraction: 5/2.
+/// Trees take about two nodes per reference they hold (an empty leaf
+/// beside most full ones): at most 2.0 on the SPD scenes and `random`
+/// under both presets (`tree` 2.0, `rings` 1.85, `random` 1.77, `teapot`
+/// 1.69), and fewer references than the room holds. The slack above that
+/// keeps each job of a build within its share of the nodes (none ran
+/// again at 5/2; the shares are in proportion to primitives, not to
+/// what a subtree needs).
+pub const NODES_PER_REF: (usize, usize) = (5, 2);
+
+/// Events of scratch [`requirements`] asks for per reference: 6. A
+/// depth-first build's events peak at the root's split, about 12 per
+/// primitive (its six events, the straddlers' new ones and the merged
+/// copies); a job build parks each job's events with an untouched copy
+/// (to run it again when it outgrows its shares), about twice that. At
+/// `refs_per_prim` 4 this is 24 per primitive: every SPD scene and
+/// `random` build the same trees with no job run again.
+pub const EVENTS_PER_REF: usize = 6;
 
 /// The least room a build accepts: one leaf holding every primitive (and
 /// its ropes, when `params` asks for them), and the six events per
