@@ -12,7 +12,8 @@
 //! built tree can be copied, saved and traced at another address. Each
 //! family's `layout` module gives the byte layout of its arenas, which the
 //! C ABI (crate `coray-ffi`) carves. Feature `alloc` adds [`owned`]
-//! storage for std users.
+//! storage for std users; feature `std` takes square roots from the
+//! compiler's intrinsic ([`geom::lanes::sqrt_rn`]).
 #![no_std]
 #![forbid(unsafe_code)]
 // `!(x > 0.0)` is deliberate throughout: unlike `x <= 0.0` it is true for NaN,
@@ -21,6 +22,9 @@
 
 #[cfg(feature = "alloc")]
 extern crate alloc;
+// Only for the float square root intrinsic (see `geom::lanes::sqrt_rn`).
+#[cfg(feature = "std")]
+extern crate std;
 
 pub mod accel;
 pub mod arena;

@@ -90,7 +90,7 @@ impl Cone {
             return None;
         }
         // Stable roots: q = -(bh + sign(bh) sqrt(disc)); t = q / a and c / q.
-        let sq = libm::sqrtf(disc);
+        let sq = crate::geom::lanes::sqrt_rn(disc);
         let qq = -(bh + if bh >= 0.0 { sq } else { -sq });
         let (mut t0, mut t1) = (qq / a, c / qq);
         if qq == 0.0 {

@@ -108,21 +108,35 @@ impl F8 {
 }
 
 /// The correctly rounded square root of `x`, as IEEE 754 gives it (so
-/// bit for bit what the scalar code's `libm::sqrtf` returns): on x86 that
-/// function itself, one `sqrtss` instruction; elsewhere [`sqrt_newton`]
-/// (libm's portable square root loops over the bits).
+/// bit for bit what every path of it returns): with feature `std`, the
+/// compiler's intrinsic (`f32::sqrt`), which takes the encoding of the
+/// code around it and vectorises over lanes (one `vsqrtps` for 8 in the
+/// AVX2 packet kernels); without it, on x86 libm's `sqrtf` (one `sqrtss`
+/// in inline assembly), elsewhere [`sqrt_newton`] (libm's portable square
+/// root loops over the bits).
 ///
-/// Measured (`coray bench spd:lattice --methods kd-packet`, AMD EPYC):
-/// `sqrtss` doubled the packets' shadow rays over the Newton iteration,
-/// whose twenty dependent f64 operations per root were most of a cone
-/// test; the legacy SSE encoding costs nothing measurable there.
+/// Measured: `sqrtss` doubled the packets' shadow rays over the Newton
+/// iteration on an AMD EPYC (`coray bench spd:lattice --methods
+/// kd-packet`), whose twenty dependent f64 operations per root were most
+/// of a cone test. On an Intel Xeon (AVX-512) the same legacy-encoded
+/// `sqrtss` inside the AVX2 kernels stalled them on the upper register
+/// state: `coray bench spd:balls --res 512 --methods kd,kd-packet`, two
+/// rounds alternated, kd-packet primary 2.22 / 3.36 Mr/s with libm against
+/// 11.67 / 11.67 with the intrinsic (hierarchical traversal 3.9-4.5).
 #[inline(always)]
 pub fn sqrt_rn(x: f32) -> f32 {
-    #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
+    #[cfg(feature = "std")]
+    {
+        x.sqrt()
+    }
+    #[cfg(all(not(feature = "std"), any(target_arch = "x86", target_arch = "x86_64")))]
     {
         libm::sqrtf(x)
     }
-    #[cfg(not(any(target_arch = "x86", target_arch = "x86_64")))]
+    #[cfg(all(
+        not(feature = "std"),
+        not(any(target_arch = "x86", target_arch = "x86_64"))
+    ))]
     {
         sqrt_newton(x)
     }

@@ -50,7 +50,7 @@ impl Sphere {
         if !(disc >= 0.0) {
             return None;
         }
-        let s = libm::sqrtf(disc);
+        let s = crate::geom::lanes::sqrt_rn(disc);
         for u in [uc - s, uc + s] {
             let t = u * to_t;
             if t >= r.t_min && t <= t_max {
