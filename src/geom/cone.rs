@@ -58,7 +58,7 @@ impl Cone {
         }
         let b = Vec3::from(self.base);
         let axis = Vec3::from(self.apex) - b;
-        let len = axis.length();
+        let len = crate::geom::lanes::sqrt_rn(axis.length_squared());
         if !(len > 0.0) {
             return None;
         }
@@ -70,7 +70,7 @@ impl Cone {
         // discriminant does not cancel for a ray passing far from its origin
         // (the same move as Ray Tracing Gems ch. 7 for spheres).
         let inv_len = 1.0 / len;
-        let dir_len = r.dir.length();
+        let dir_len = crate::geom::lanes::sqrt_rn(r.dir.length_squared());
         let d = r.dir / dir_len;
         let center = b + axis * 0.5;
         let shift = (center - r.origin).dot(d);
