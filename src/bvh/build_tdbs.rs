@@ -241,6 +241,33 @@ fn partition(run: &mut [u32], spare: &mut [u32], left: impl Fn(u32) -> bool) {
 mod tests {
     use super::*;
 
+    /// A TDBS build's scratch over `N` primitives (`L` = `8 * N` links,
+    /// [`links_needed`]), lent to one build at a time.
+    struct Scratch<const N: usize, const L: usize> {
+        boxes: [Aabb; N],
+        keys: [f32; N],
+        links: [u32; L],
+    }
+
+    impl<const N: usize, const L: usize> Scratch<N, L> {
+        fn new() -> Self {
+            Scratch {
+                boxes: [Aabb::EMPTY; N],
+                keys: [0.0; N],
+                links: [0; L],
+            }
+        }
+
+        fn lend(&mut self) -> BvhScratch<'_> {
+            BvhScratch {
+                boxes: &mut self.boxes,
+                keys: &mut self.keys,
+                links: &mut self.links,
+                clusters: &mut [],
+            }
+        }
+    }
+
     /// The integer key orders as `f32::total_cmp` on the centres, then
     /// the primitive index.
     #[test]
@@ -394,9 +421,7 @@ mod tests {
             for leaf_size in [1, 2, 5] {
                 let mut nodes = [[BvhNode::default(); 2 * N]; 2];
                 let mut refs = [[0u32; N]; 2];
-                let mut boxes = [Aabb::EMPTY; N];
-                let mut keys = [0.0f32; N];
-                let mut links = [0u32; 8 * N];
+                let mut scratch = Scratch::<N, { 8 * N }>::new();
                 let [na, nb] = &mut nodes;
                 let [ra, rb] = &mut refs;
                 let a = build(
@@ -409,12 +434,7 @@ mod tests {
                         nodes: na,
                         refs: ra,
                     },
-                    BvhScratch {
-                        boxes: &mut boxes,
-                        keys: &mut keys,
-                        links: &mut links,
-                        clusters: &mut [],
-                    },
+                    scratch.lend(),
                 )
                 .unwrap();
                 let (a_nodes, a_refs) = a.parts();
@@ -427,12 +447,7 @@ mod tests {
                         nodes: nb,
                         refs: rb,
                     },
-                    BvhScratch {
-                        boxes: &mut boxes,
-                        keys: &mut keys,
-                        links: &mut links,
-                        clusters: &mut [],
-                    },
+                    scratch.lend(),
                 )
                 .unwrap();
                 let (b_nodes, b_refs) = b.parts();
@@ -468,9 +483,7 @@ mod tests {
         let run = |rule: LeafRule, leaf_size: u32| {
             let mut nodes = [BvhNode::default(); 2 * N];
             let mut refs = [0u32; N];
-            let mut boxes = [Aabb::EMPTY; N];
-            let mut keys = [0.0f32; N];
-            let mut links = [0u32; 8 * N];
+            let mut scratch = Scratch::<N, { 8 * N }>::new();
             let b = build(
                 &scene,
                 None,
@@ -481,12 +494,7 @@ mod tests {
                     nodes: &mut nodes,
                     refs: &mut refs,
                 },
-                BvhScratch {
-                    boxes: &mut boxes,
-                    keys: &mut keys,
-                    links: &mut links,
-                    clusters: &mut [],
-                },
+                scratch.lend(),
             )
             .unwrap();
             let (n, r) = b.parts();
