@@ -109,8 +109,65 @@ pub struct PreparedRay {
 
 impl PreparedRay {
     /// Precomputes the per-ray constants. Call only for a [`Ray::is_valid`] ray.
+    ///
+    /// The five divisions run as two of four lanes (`1 / d` and the
+    /// shear's `(d_x, d_y, 1) / d_z`), each lane the IEEE quotient the
+    /// scalar division gives; the axes come from tables, not `% 3`.
+    #[inline]
     pub fn new(ray: &Ray) -> PreparedRay {
         let d = ray.dir;
+        let a = d.abs();
+        let kz = if a.x >= a.y && a.x >= a.z {
+            0
+        } else if a.y >= a.z {
+            1
+        } else {
+            2
+        };
+        const NEXT: [usize; 3] = [1, 2, 0];
+        let dk = d.to_array();
+        let (mut kx, mut ky) = (NEXT[kz], NEXT[NEXT[kz]]);
+        if dk[kz] < 0.0 {
+            core::mem::swap(&mut kx, &mut ky);
+        }
+        let inv = div4([1.0; 4], [dk[0], dk[1], dk[2], 1.0]);
+        let s = div4([dk[kx], dk[ky], 1.0, 1.0], [dk[kz]; 4]);
+        PreparedRay {
+            origin: ray.origin,
+            dir: d,
+            inv_dir: Vec3::new(inv[0], inv[1], inv[2]),
+            t_min: ray.t_min,
+            t_max: ray.t_max,
+            kx,
+            ky,
+            kz,
+            sx: s[0],
+            sy: s[1],
+            sz: s[2],
+        }
+    }
+
+    /// The point at parameter `t`.
+    #[inline]
+    pub fn at(&self, t: f32) -> Vec3 {
+        self.origin + self.dir * t
+    }
+}
+
+/// Lane-wise `a / b`: one vector division where the target has one.
+#[inline(always)]
+fn div4(a: [f32; 4], b: [f32; 4]) -> [f32; 4] {
+    [a[0] / b[0], a[1] / b[1], a[2] / b[2], a[3] / b[3]]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::SplitMix64;
+
+    /// The constants as the scalar formulas give them: axes by `% 3`,
+    /// each quotient its own division.
+    fn reference(d: Vec3) -> ([usize; 3], [f32; 3], [f32; 3]) {
         let a = d.abs();
         let kz = if a.x >= a.y && a.x >= a.z {
             0
@@ -124,24 +181,37 @@ impl PreparedRay {
         if d[kz] < 0.0 {
             core::mem::swap(&mut kx, &mut ky);
         }
-        PreparedRay {
-            origin: ray.origin,
-            dir: d,
-            inv_dir: Vec3::ONE / d,
-            t_min: ray.t_min,
-            t_max: ray.t_max,
-            kx,
-            ky,
-            kz,
-            sx: d[kx] / d[kz],
-            sy: d[ky] / d[kz],
-            sz: 1.0 / d[kz],
-        }
+        let inv = [1.0 / d.x, 1.0 / d.y, 1.0 / d.z];
+        (
+            [kx, ky, kz],
+            inv,
+            [d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]],
+        )
     }
 
-    /// The point at parameter `t`.
-    #[inline]
-    pub fn at(&self, t: f32) -> Vec3 {
-        self.origin + self.dir * t
+    #[test]
+    fn prepared_constants_are_the_scalar_quotients_bit_for_bit() {
+        let mut g = SplitMix64(7);
+        let specials = [0.0, -0.0, 1e-40, -1e-40, 1e-30, 3e38, -3e38, 1.0, -1.0];
+        for i in 0..20_000 {
+            let mut c = [0.0f32; 3];
+            for v in c.iter_mut() {
+                *v = if g.next_f32() < 0.2 {
+                    specials[(g.next_u64() % specials.len() as u64) as usize]
+                } else {
+                    (g.next_f32() * 2.0 - 1.0) * 10f32.powi((g.next_u64() % 7) as i32 - 3)
+                };
+            }
+            let d = Vec3::from(c);
+            if d == Vec3::ZERO {
+                continue;
+            }
+            let r = PreparedRay::new(&Ray::new(Vec3::ZERO, d, 0.0, 1.0));
+            let (k, inv, s) = reference(d);
+            assert_eq!([r.kx, r.ky, r.kz], k, "ray {i}: {d}");
+            let bits = |v: [f32; 3]| v.map(f32::to_bits);
+            assert_eq!(bits(r.inv_dir.to_array()), bits(inv), "ray {i}: {d}");
+            assert_eq!(bits([r.sx, r.sy, r.sz]), bits(s), "ray {i}: {d}");
+        }
     }
 }
