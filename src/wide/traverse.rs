@@ -44,7 +44,9 @@ trait Query {
 
 struct Closest {
     best: Hit,
-    t_max: f32,
+    /// The ray's end until something is hit, then the best hit's `t`
+    /// (kept, not chosen at every box and test).
+    limit: f32,
     tests: u64,
 }
 
@@ -52,19 +54,16 @@ impl Query for Closest {
     const SORTED: bool = true;
     #[inline(always)]
     fn limit(&self) -> f32 {
-        if self.best.is_hit() {
-            self.best.t
-        } else {
-            self.t_max
-        }
+        self.limit
     }
     #[inline(always)]
     fn visit(&mut self, scene: &Scene, r: &PreparedRay, refs: &[u32]) -> bool {
         for &p in refs {
             self.tests += 1;
-            if let Some(h) = scene.intersect_prim(p as usize, r, self.limit()) {
+            if let Some(h) = scene.intersect_prim(p as usize, r, self.limit) {
                 if !self.best.is_hit() || h.t < self.best.t || tie_wins(&h, &self.best) {
                     self.best = h;
+                    self.limit = h.t;
                 }
             }
         }
@@ -166,7 +165,7 @@ impl WideBvh<'_> {
         let r = PreparedRay::new(ray);
         let mut q = Closest {
             best: Hit::MISS,
-            t_max: r.t_max,
+            limit: r.t_max,
             tests: 0,
         };
         self.walk(&r, &mut q, stack, stats);
