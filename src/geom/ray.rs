@@ -111,7 +111,7 @@ impl PreparedRay {
     /// Precomputes the per-ray constants. Call only for a [`Ray::is_valid`] ray.
     ///
     /// The five divisions run as two of four lanes (`1 / d` and the
-    /// shear's `(d_x, d_y, 1) / d_z`), each lane the IEEE quotient the
+    /// shear's `(d_kx, d_ky, 1) / d_kz`), each lane the IEEE quotient the
     /// scalar division gives; the axes come from tables, not `% 3`.
     #[inline]
     pub fn new(ray: &Ray) -> PreparedRay {
