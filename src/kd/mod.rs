@@ -178,9 +178,9 @@ pub struct KdRequirements {
 ///
 /// A build given less (down to [`min_requirements`]) still succeeds; it
 /// stops splitting where room runs out and sets [`KD_FLAG_TRUNCATED`]. A
-/// scene may need more than `refs_per_prim` references per primitive (the
-/// SPD gears needs 8.2 under [`KdParams::auto`]), or more nodes per
-/// reference; it is then truncated too.
+/// scene may need more than `refs_per_prim` references per primitive (SPD
+/// gears' tree under [`KdParams::auto`] takes 26.5 when given room for 64),
+/// or more nodes per reference; it is then truncated too.
 pub fn requirements(prim_count: usize, params: &KdParams) -> KdRequirements {
     let n = prim_count.max(1);
     let refs = n * params.refs_per_prim.max(1) as usize;

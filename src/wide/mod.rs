@@ -125,8 +125,9 @@ pub const LEAF_TRAVERSAL_COST: f64 = 1.0;
 /// Builds the binary SAH hierarchy into `scratch`, a node of at most
 /// `leaf_size` (1 or more) primitives becoming a leaf where the surface
 /// area heuristic prices it no higher than its best split (a traversal
-/// step at [`LEAF_TRAVERSAL_COST`]), then collapses it into `storage`. Fails for bad input or parameters and for slices shorter
-/// than [`requirements`].
+/// step at [`LEAF_TRAVERSAL_COST`]), then collapses it into `storage`.
+/// Fails for bad input or parameters and for slices shorter than
+/// [`requirements`].
 pub fn build<'a>(
     scene: &Scene<'a>,
     leaf_size: u32,
