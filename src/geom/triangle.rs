@@ -58,64 +58,72 @@ pub fn intersect_triangle(
 /// the split clipping of the kd build: a straddling triangle's events come
 /// from its clipped part, not from its whole box.
 pub fn clip_triangle_bounds(v: [Vec3; 3], voxel: &Aabb) -> Option<Aabb> {
-    // A convex polygon clipped by 6 planes has at most 3 + 6 vertices.
-    let mut poly = [Vec3::ZERO; 9];
-    let mut tmp = [Vec3::ZERO; 9];
-    poly[..3].copy_from_slice(&v);
+    // A convex polygon clipped by 6 planes has at most 3 + 6 vertices; the
+    // two buffers take turns as input and output.
+    let mut a = [Vec3::ZERO; 9];
+    let mut b = [Vec3::ZERO; 9];
+    a[..3].copy_from_slice(&v);
     let mut n = 3;
-    for axis in 0..3 {
-        for side in 0..2 {
-            let (plane, keep_below) = if side == 0 {
-                (voxel.min[axis], false)
-            } else {
-                (voxel.max[axis], true)
-            };
-            let inside = |p: Vec3| {
-                if keep_below {
-                    p[axis] <= plane
-                } else {
-                    p[axis] >= plane
-                }
-            };
-            // A plane with every vertex on its inner side leaves the
-            // polygon as it is (same vertices, same order): skip it.
-            if poly[..n].iter().all(|&p| inside(p)) {
-                continue;
-            }
-            let mut m = 0;
-            for i in 0..n {
-                let p = poly[i];
-                let q = poly[if i + 1 == n { 0 } else { i + 1 }];
-                let (pin, qin) = (inside(p), inside(q));
-                if pin {
-                    tmp[m] = p;
-                    m += 1;
-                }
-                if pin != qin && m < 9 {
-                    let s = (plane - p[axis]) / (q[axis] - p[axis]);
-                    let mut x = p + (q - p) * s;
-                    x[axis] = plane;
-                    tmp[m] = x;
-                    m += 1;
-                }
-            }
-            n = m;
-            if n == 0 {
-                return None;
-            }
-            poly[..n].copy_from_slice(&tmp[..n]);
-        }
+    n = clip_plane::<0, false>(&a, n, &mut b, voxel.min.x)?;
+    n = clip_plane::<0, true>(&b, n, &mut a, voxel.max.x)?;
+    n = clip_plane::<1, false>(&a, n, &mut b, voxel.min.y)?;
+    n = clip_plane::<1, true>(&b, n, &mut a, voxel.max.y)?;
+    n = clip_plane::<2, false>(&a, n, &mut b, voxel.min.z)?;
+    n = clip_plane::<2, true>(&b, n, &mut a, voxel.max.z)?;
+    let mut bounds = Aabb::EMPTY;
+    for p in &a[..n] {
+        bounds = bounds.grow(*p);
     }
-    let mut b = Aabb::EMPTY;
-    for p in &poly[..n] {
-        b = b.grow(*p);
-    }
-    let b = b.intersection(voxel);
-    if b.is_empty() {
+    let bounds = bounds.intersection(voxel);
+    if bounds.is_empty() {
         None
     } else {
-        Some(b)
+        Some(bounds)
     }
+}
+
+/// One Sutherland-Hodgman step: the polygon `poly[..n]` clipped to the
+/// inner side of the plane `p[AXIS] = plane` (below it when `KEEP_BELOW`),
+/// written to `out`; returns its vertex count, `None` when nothing is
+/// left. A plane with every vertex on its inner side copies the polygon
+/// as it is (same vertices, same order). The axis and side are constants
+/// so that each of the six steps compiles to straight-line code.
+#[inline(always)]
+fn clip_plane<const AXIS: usize, const KEEP_BELOW: bool>(
+    poly: &[Vec3; 9],
+    n: usize,
+    out: &mut [Vec3; 9],
+    plane: f32,
+) -> Option<usize> {
+    let inside = |p: Vec3| {
+        if KEEP_BELOW {
+            p[AXIS] <= plane
+        } else {
+            p[AXIS] >= plane
+        }
+    };
+    if poly[..n].iter().all(|&p| inside(p)) {
+        out[..n].copy_from_slice(&poly[..n]);
+        return Some(n);
+    }
+    let mut m = 0;
+    for i in 0..n {
+        let p = poly[i];
+        let q = poly[if i + 1 == n { 0 } else { i + 1 }];
+        let (pin, qin) = (inside(p), inside(q));
+        if pin {
+            out[m] = p;
+            m += 1;
+        }
+        if pin != qin && m < 9 {
+            let s = (plane - p[AXIS]) / (q[AXIS] - p[AXIS]);
+            let mut x = p + (q - p) * s;
+            x[AXIS] = plane;
+            out[m] = x;
+            m += 1;
+        }
+    }
+    (m > 0).then_some(m)
 }
 
 #[cfg(test)]

@@ -545,8 +545,11 @@ impl<'s, 'a> Builder<'s, 'a> {
             self.params.cost_intersection,
             self.params.empty_bonus,
         );
+        // Counts convert through i32 (they are below 2^30): one
+        // instruction, where an unsigned 64-bit one takes a branch and
+        // several; the same value, so the same rounding.
         let cost = |pl: f32, pr: f32, nl: usize, nr: usize| {
-            let c = kt + ki * (pl * nl as f32 + pr * nr as f32);
+            let c = kt + ki * (pl * nl as i32 as f32 + pr * nr as i32 as f32);
             if nl == 0 || nr == 0 {
                 c * bonus
             } else {
@@ -845,9 +848,15 @@ impl<'s, 'a> Builder<'s, 'a> {
 
     /// Splits the old events in `[s, e)` by their primitive's side and
     /// merges each side with its sorted new events (`left_new`,
-    /// `right_new`), writing at `*at.0` and `*at.1`, in one pass over the
-    /// old events (a straddling primitive's old events are dropped: its
-    /// clipped ones are among the new).
+    /// `right_new`), writing at `*at.0` and `*at.1` (a straddling
+    /// primitive's old events are dropped: its clipped ones are among the
+    /// new). The outputs lie after every input.
+    ///
+    /// The old events are partitioned first, without a branch on their
+    /// side (whose outcome is a coin toss a predictor cannot learn): each
+    /// is stored at its side's cursor, a dropped one back in its own slot.
+    /// The few new events then go in from the back, each after a binary
+    /// search, moving the old ones above it in one block.
     fn merge(
         &mut self,
         (s, e): (usize, usize),
@@ -855,31 +864,66 @@ impl<'s, 'a> Builder<'s, 'a> {
         right_new: (usize, usize),
         at: (&mut usize, &mut usize),
     ) {
-        let (mut jl, mut jr) = (left_new.0, right_new.0);
         let (lat, rat) = at;
+        let (l0, r0) = (*lat, *rat);
+        let (mut l, mut r) = (l0, r0);
         for i in s..e {
             let ev = self.events[i];
-            let (j, end, out) = match self.flags[ev.prim()] {
-                LEFT => (&mut jl, left_new.1, &mut *lat),
-                RIGHT => (&mut jr, right_new.1, &mut *rat),
-                _ => continue,
+            let side = self.flags[ev.prim()];
+            let (to_left, to_right) = (side == LEFT, side == RIGHT);
+            let dst = if to_left {
+                l
+            } else if to_right {
+                r
+            } else {
+                i
             };
-            // New events that sort before this old one go first (an old
-            // event goes before a new one it ties with).
-            while *j < end && ev > self.events[*j] {
-                self.events[*out] = self.events[*j];
-                *j += 1;
-                *out += 1;
-            }
-            self.events[*out] = ev;
-            *out += 1;
+            self.events[dst] = ev;
+            l += to_left as usize;
+            r += to_right as usize;
         }
-        for (j, end, out) in [(jl, left_new.1, lat), (jr, right_new.1, rat)] {
-            let n = end - j;
-            self.events.copy_within(j..end, *out);
-            *out += n;
-        }
+        *lat = merge_from_back(self.events, l0, l, left_new);
+        *rat = merge_from_back(self.events, r0, r, right_new);
     }
+}
+
+/// Merges the sorted events `new` into the sorted events `[start, end)`,
+/// which have room after them for as many; returns the merged run's end.
+/// An old event goes before a new one it ties with. `new` lies outside
+/// `[start, end + new's length)`.
+fn merge_from_back(
+    events: &mut [KdEvent],
+    start: usize,
+    end: usize,
+    (ns, ne): (usize, usize),
+) -> usize {
+    let mut hi = end;
+    if (ne - ns) * 16 >= end - start {
+        // Many new events: one step per event, from the back, until the
+        // new ones run out (the old ones below them are in place).
+        let mut out = end + (ne - ns);
+        let mut j = ne;
+        while j > ns {
+            let ev = events[j - 1];
+            out -= 1;
+            if hi > start && events[hi - 1] > ev {
+                hi -= 1;
+                events[out] = events[hi];
+            } else {
+                j -= 1;
+                events[out] = ev;
+            }
+        }
+        return end + (ne - ns);
+    }
+    for m in (0..ne - ns).rev() {
+        let ev = events[ns + m];
+        let p = start + events[start..hi].partition_point(|old| *old <= ev);
+        events.copy_within(p..hi, p + m + 1);
+        events[p + m] = ev;
+        hi = p;
+    }
+    end + (ne - ns)
 }
 
 #[cfg(test)]
