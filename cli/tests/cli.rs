@@ -732,6 +732,26 @@ fn build_table_has_every_builder() {
         let c = row["cells"].as_array().unwrap();
         assert_eq!(c[0]["bytes_per_prim"], c[1]["bytes_per_prim"], "{row}");
     }
+    // Beside the builds, the primary rays through kd-auto's tree and
+    // Embree's, every one answering as kd-auto's hierarchical traversal.
+    let mut want = vec!["kd", "kd-packet"];
+    if cfg!(feature = "embree") {
+        want.extend(["embree", "embree8"]);
+    }
+    for row in rows {
+        let trace = row["trace"].as_array().unwrap();
+        let names: Vec<&str> = trace
+            .iter()
+            .map(|t| t["method"].as_str().unwrap())
+            .collect();
+        assert_eq!(names, want, "{row}");
+        let rays = row["rays"].as_u64().unwrap();
+        assert!(rays > 0, "{row}");
+        for t in trace {
+            assert!(t["mrays"].as_f64().unwrap() > 0.0, "{t}");
+            assert_eq!(t["mismatches"], 0, "{t}");
+        }
+    }
 }
 
 /// The speed table traces every set with every method, the C-ABI rows

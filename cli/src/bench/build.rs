@@ -6,7 +6,10 @@
 //! requirements ask for plus the scratch; Embree's are what its device memory monitor saw the commit
 //! allocate (kept, and the most held during it), the scene's own copies
 //! excluded. kd-auto and Embree build at one thread and at `--threads N`
-//! (coray's build jobs on N threads).
+//! (coray's build jobs on N threads). Beside the builds, primary rays at
+//! the scene's resolution traced through kd-auto's tree (hierarchical and
+//! packets) and through Embree's scene (`rtcIntersect1`, `rtcIntersect8`),
+//! interleaved, so a faster build is read beside what its tree traces.
 
 use crate::method::Preset;
 use coray::owned::{OwnedBvh, OwnedKd, OwnedWide};
@@ -30,7 +33,20 @@ pub struct BuildCell {
     pub truncated: bool,
 }
 
-/// One scene: every builder.
+/// One traversal of the scene's primary rays.
+#[derive(Clone, Debug, Serialize)]
+pub struct TraceCell {
+    /// The method, as the speed table names it (kd, kd-packet, embree,
+    /// embree8).
+    pub method: String,
+    /// Millions of rays per second, best run, one thread.
+    pub mrays: f64,
+    /// Rays answering otherwise than kd-auto's hierarchical traversal
+    /// (Embree: beyond the tie rules).
+    pub mismatches: usize,
+}
+
+/// One scene: every builder, and the primary rays traced.
 #[derive(Clone, Debug, Serialize)]
 pub struct BuildRow {
     /// The scene.
@@ -39,6 +55,75 @@ pub struct BuildRow {
     pub prims: usize,
     /// Every builder.
     pub cells: Vec<BuildCell>,
+    /// Primary rays (width x height of the scene's camera) through
+    /// kd-auto's tree and Embree's.
+    pub rays: usize,
+    /// Every traversal of them.
+    pub trace: Vec<TraceCell>,
+}
+
+/// The methods of the traversal columns.
+const TRACE_METHODS: [&str; 2] = ["kd", "kd-packet"];
+
+/// Primary rays through kd-auto's tree (hierarchical, packets) and
+/// Embree's, one thread, methods interleaved, best of `repeat`; each
+/// method's answers judged against kd-auto's hierarchical traversal.
+fn trace_primary(s: &crate::scene::SceneData, repeat: usize) -> Result<Vec<TraceCell>, String> {
+    use super::harness::trace;
+    use super::row::{judge_closest, tally};
+    use crate::built::{Built, Visit};
+    use crate::method::{EmbreeCall, Method};
+    use crate::shoot::Shooter;
+    let mut methods: Vec<Method> = TRACE_METHODS
+        .iter()
+        .map(|m| Method::parse(m).expect("registered"))
+        .collect();
+    if cfg!(feature = "embree") {
+        methods.push(Method::Embree(EmbreeCall::One));
+        methods.push(Method::Embree(EmbreeCall::Eight));
+    }
+    let built: Vec<Built> = methods
+        .iter()
+        .map(|&m| Built::new(m, &s.mesh, Preset::Auto, 1))
+        .collect::<Result<_, _>>()?;
+    let row_major = super::rays::primary(&s.mesh);
+    let cam = &s.mesh.camera;
+    let rays: Vec<coray::Ray> = super::rays::tile_order(cam.width, cam.height)
+        .iter()
+        .map(|&i| row_major[i])
+        .collect();
+    struct Time<'a>(&'a [coray::Ray]);
+    impl Visit for Time<'_> {
+        type Out = (f64, Vec<coray::Hit>);
+        fn visit<S: Shooter>(self, s: &S) -> Self::Out {
+            let (secs, hits, _, _) = trace(s, self.0, None, false, 1);
+            (secs, hits)
+        }
+    }
+    let mut best = vec![f64::INFINITY; built.len()];
+    let mut judged = Vec::new();
+    let mut reference = Vec::new();
+    for rep in 0..repeat.max(1) {
+        for (mi, b) in built.iter().enumerate() {
+            let (secs, hits) = b.visit(Time(&rays));
+            best[mi] = best[mi].min(secs);
+            if rep == 0 {
+                if mi == 0 {
+                    reference = hits.clone();
+                }
+                judged.push(tally(&judge_closest(b, &rays, &hits, &reference)).0);
+            }
+        }
+    }
+    Ok(methods
+        .iter()
+        .zip(best.iter().zip(judged))
+        .map(|(m, (secs, mismatches))| TraceCell {
+            method: m.to_string(),
+            mrays: rays.len() as f64 / secs / 1e6,
+            mismatches,
+        })
+        .collect())
 }
 
 fn kd(scene: &Scene, preset: Preset, name: &str, threads: usize) -> Result<BuildCell, String> {
@@ -150,10 +235,13 @@ pub fn run(s: &crate::scene::SceneData, repeat: usize, threads: usize) -> Result
             }
         }
     }
+    let trace = trace_primary(s, repeat)?;
     Ok(BuildRow {
         scene: s.name.clone(),
         prims: scene.prim_count(),
         cells: cells.into_iter().map(|c| c.expect("built")).collect(),
+        rays: (s.mesh.camera.width * s.mesh.camera.height) as usize,
+        trace,
     })
 }
 
@@ -171,8 +259,11 @@ columns: prims = primitives after triangulation; per builder: ms = best build ti
   kd-auto keeps no ropes (hierarchical and packet traversal need none; with ropes, for
   rope traversal and the LCTS casts, a leaf takes 48 bytes more); kd-paper keeps them.
   wide = tdbs-sah's build (leaves of up to 4 where the SAH prices them lower) collapsed
-  into 4-wide nodes; its +s holds the
-  binary hierarchy and the node room the collapse did not use.";
+  into 4-wide nodes; its +s holds the binary hierarchy and the node room the collapse did
+  not use. Primary Mr/s: the scene's primary rays (one per pixel at --res, in 4 x 2 pixel
+  blocks) on one thread through kd-auto's tree, hierarchical (kd) and in packets
+  (kd-packet), and through Embree's scene (e1 = rtcIntersect1, e8 = rtcIntersect8); best
+  of --repeat runs, methods interleaved; mism = rays answering otherwise than kd.";
 
 /// Prints the rows.
 pub fn print(rows: &[BuildRow]) {
@@ -190,11 +281,27 @@ pub fn print(rows: &[BuildRow]) {
     if let Some(t) = &threads {
         head += &format!(" | {:>6}", format!("x{t}"));
     }
+    let width = 9 * first.trace.len() + 5;
+    head += &format!(" | {:>width$}", "primary Mr/s");
     println!("{head}");
     let mut sub = format!("{:<14} {:>7}", "", "");
     for _ in &first.cells {
         sub += &format!(" | {:>8} {:>6} {:>6}", "ms", "B/p", "+s");
     }
+    sub += &format!(" | {:>6}", "");
+    if threads.is_some() {
+        sub += &format!(" | {:>6}", "");
+    }
+    sub += " |";
+    for t in &first.trace {
+        let short = match t.method.as_str() {
+            "embree" => "e1",
+            "embree8" => "e8",
+            m => m,
+        };
+        sub += &format!(" {short:>8}");
+    }
+    sub += &format!(" {:>4}", "mism");
     println!("{sub}");
     for r in rows {
         let mut line = format!("{:<14} {:>7}", r.scene, r.prims);
@@ -218,6 +325,14 @@ pub fn print(rows: &[BuildRow]) {
         if let Some(t) = &threads {
             line += &ratio(&format!("kd-auto ({t} thr)"), &format!("embree ({t} thr)"));
         }
+        line += " |";
+        for t in &r.trace {
+            line += &format!(" {:>8.2}", t.mrays);
+        }
+        line += &format!(
+            " {:>4}",
+            r.trace.iter().map(|t| t.mismatches).sum::<usize>()
+        );
         println!("{line}");
     }
     println!("{LEGEND}");
