@@ -930,6 +930,54 @@ fn merge_from_back(
 mod tests {
     use super::*;
 
+    /// Merging new events in from the back gives the sorted union, old
+    /// before new where they tie, whether few new events go in (a binary
+    /// search and a block move each) or many (one step per event), at
+    /// either end, none, or only new ones.
+    #[test]
+    fn merge_from_back_is_the_sorted_union() {
+        let mut g = crate::rng::SplitMix64(5);
+        const N: usize = 200;
+        for case in 0..400 {
+            let olds = g.below(N as u64) as usize;
+            let news = match case % 4 {
+                0 => g.below(4) as usize,
+                1 => g.below(N as u64) as usize,
+                2 => 0,
+                _ => g.below(40) as usize,
+            };
+            // Few distinct positions, so old and new events tie often.
+            let mut event = |g: &mut crate::rng::SplitMix64| {
+                KdEvent::new(g.below(16) as f32, g.below(8) as usize, g.below(3) as u32)
+            };
+            let mut events = [KdEvent::default(); 3 * N];
+            // New events first, the old ones after them with room behind.
+            for e in &mut events[..news] {
+                *e = event(&mut g);
+            }
+            for e in &mut events[N..N + olds] {
+                *e = event(&mut g);
+            }
+            events[..news].sort_unstable();
+            events[N..N + olds].sort_unstable();
+            // The reference: a stable merge, old first on ties.
+            let mut want = [KdEvent::default(); 2 * N];
+            let (mut i, mut j) = (N, 0);
+            for w in &mut want[..olds + news] {
+                if j == news || (i < N + olds && events[i] <= events[j]) {
+                    *w = events[i];
+                    i += 1;
+                } else {
+                    *w = events[j];
+                    j += 1;
+                }
+            }
+            let end = merge_from_back(&mut events, N, N + olds, (0, news));
+            assert_eq!(end, N + olds + news, "case {case}");
+            assert_eq!(events[N..end], want[..olds + news], "case {case}");
+        }
+    }
+
     /// The integer key orders as position, then kind, then primitive.
     #[test]
     fn key_orders_by_position_kind_and_primitive() {
