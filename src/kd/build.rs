@@ -656,6 +656,17 @@ impl<'s, 'a> Builder<'s, 'a> {
         let pb = crate::sort_key::ordered_bits(p + 0.0);
         let mut straddling = 0;
         let (mut left_only, mut right_only) = (0, 0);
+        // A primitive whose end lies beyond the plane while its start was
+        // marked straddling does straddle: its end event is listed at the
+        // top of the free events, downwards (stored for every end beyond
+        // the plane, the count advanced only for those), so the clipping
+        // below need not scan the axis again. The list fits below the
+        // limit and above this node's events whenever the room check
+        // below passes; when it might not, the axis is scanned instead.
+        let top = task.start + task.total();
+        let list_top = self.event_limit;
+        let listing = list_top >= top + (ke - ks);
+        let mut listed = 0;
         for i in ks..ke {
             let ev = self.events[i];
             let at = ev.pos_bits();
@@ -666,7 +677,13 @@ impl<'s, 'a> Builder<'s, 'a> {
                     straddling -= 1;
                     LEFT
                 }
-                END => continue,
+                END => {
+                    if listing {
+                        self.events[list_top - 1 - listed] = ev;
+                        listed += (self.flags[ev.prim()] == BOTH) as usize;
+                    }
+                    continue;
+                }
                 _ if at < pb || (at == pb && split.planar_left) => LEFT,
                 _ => RIGHT,
             };
@@ -679,7 +696,6 @@ impl<'s, 'a> Builder<'s, 'a> {
         }
 
         // New events of the straddling primitives, clipped into each child.
-        let top = task.start + task.total();
         let s2 = 2 * straddling;
         let dest = top + 12 * straddling;
         // The children's events are written at `dest` (left) and after
@@ -695,27 +711,37 @@ impl<'s, 'a> Builder<'s, 'a> {
         let mut tl = [0usize; 3];
         let mut tr = [0usize; 3];
         let (mut nl_new, mut nr_new) = (0, 0);
-        for i in ks..ke {
-            let ev = self.events[i];
-            if ev.kind() != START || self.flags[ev.prim()] != BOTH {
-                continue;
-            }
-            let prim = ev.prim();
-            if let Some(b) = self.scene.clipped_bounds(prim, &lv) {
+        // The order the straddlers come in does not matter: their new
+        // events are sorted below, and no two events share a key.
+        let mut clip = |b: &mut Self, prim: usize| {
+            if let Some(c) = b.scene.clipped_bounds(prim, &lv) {
                 nl_new += 1;
-                for (axis, c) in tl.iter_mut().enumerate() {
-                    let mut at = top + axis * s2 + *c;
-                    push_events(self.events, &mut at, prim, &b, axis);
-                    *c = at - top - axis * s2;
+                for (axis, n) in tl.iter_mut().enumerate() {
+                    let mut at = top + axis * s2 + *n;
+                    push_events(b.events, &mut at, prim, &c, axis);
+                    *n = at - top - axis * s2;
                 }
             }
-            if let Some(b) = self.scene.clipped_bounds(prim, &rv) {
+            if let Some(c) = b.scene.clipped_bounds(prim, &rv) {
                 nr_new += 1;
-                for (axis, c) in tr.iter_mut().enumerate() {
+                for (axis, n) in tr.iter_mut().enumerate() {
                     let base = top + 6 * straddling + axis * s2;
-                    let mut at = base + *c;
-                    push_events(self.events, &mut at, prim, &b, axis);
-                    *c = at - base;
+                    let mut at = base + *n;
+                    push_events(b.events, &mut at, prim, &c, axis);
+                    *n = at - base;
+                }
+            }
+        };
+        if listing {
+            for j in 0..listed {
+                let prim = self.events[list_top - 1 - j].prim();
+                clip(self, prim);
+            }
+        } else {
+            for i in ks..ke {
+                let ev = self.events[i];
+                if ev.kind() == START && self.flags[ev.prim()] == BOTH {
+                    clip(self, ev.prim());
                 }
             }
         }
