@@ -973,7 +973,7 @@ mod tests {
                 _ => g.below(40) as usize,
             };
             // Few distinct positions, so old and new events tie often.
-            let mut event = |g: &mut crate::rng::SplitMix64| {
+            let event = |g: &mut crate::rng::SplitMix64| {
                 KdEvent::new(g.below(16) as f32, g.below(8) as usize, g.below(3) as u32)
             };
             let mut events = [KdEvent::default(); 3 * N];
