@@ -257,6 +257,35 @@ fn job_build_falls_back_to_one_pass_when_a_share_runs_out() {
     }
 }
 
+/// SPD gears outgrows the default room: its jobs run out of their
+/// reference shares by more than the whole room holds, so `finish` skips
+/// the greedy pass (it would run out too) and shares the room fairly from
+/// the start: the depth-first build's tree, one pass less.
+#[test]
+fn jobs_that_show_the_room_too_small_skip_the_greedy_pass() {
+    let mesh = spd_mesh("gears", None);
+    let scene = mesh.scene();
+    let params = KdParams::auto();
+    let req = kd::requirements(scene.prim_count(), &params);
+    let reference = depth_first(&scene, &params, &req);
+    assert_ne!(reference.info.flags & KD_FLAG_TRUNCATED, 0);
+    for run in [Run::ByFinish, Run::Threads(2)] {
+        let (m, report) = by_jobs(&scene, &params, &req, run);
+        assert!(report.one_pass && report.fair_pass_only, "{report:?}");
+        assert!(m == reference, "{run:?}");
+    }
+    // With room for the untruncated tree the jobs fit: no pass is skipped.
+    let roomy = KdRequirements {
+        refs: 40 * scene.prim_count(),
+        nodes: 60 * scene.prim_count(),
+        events: 12 * 40 * scene.prim_count(),
+        ..req
+    };
+    let (m, report) = by_jobs(&scene, &params, &roomy, Run::ByFinish);
+    assert!(!report.fair_pass_only, "{report:?}");
+    assert_eq!(m.info.flags & KD_FLAG_TRUNCATED, 0, "{report:?}");
+}
+
 /// With references for the tree and barely more, shares in proportion to
 /// primitives are too small for some jobs; `finish` runs those again in
 /// the room the others left, and the tree is still the one-pass build's.

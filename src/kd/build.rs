@@ -194,8 +194,14 @@ pub(super) struct Builder<'s, 'a> {
     pub(super) depth: u32,
     pub(super) truncated: bool,
     /// References of the leaves made so far plus every pending node: what
-    /// the tree needs at least if nothing more is split.
+    /// the tree needs at least if nothing more is split. It never shrinks
+    /// (no split leaves its children fewer references than it had), so
+    /// the tree a greedy build would finish with needs at least every
+    /// value it takes.
     frontier_refs: usize,
+    /// The frontier a greedy build first found past its reference room (0
+    /// while it has not): a lower bound on what the untruncated tree needs.
+    pub(super) refs_short: usize,
     /// How the reference room is shared: greedily (any split that fits the
     /// whole slice) or fairly (each subtree within its [`Task::ref_budget`]).
     fair: bool,
@@ -254,14 +260,29 @@ pub fn build_depth_first<'a>(
     storage: KdStorage<'a>,
     scratch: KdScratch<'_>,
 ) -> Result<KdTree<'a>, Error> {
+    one_pass(scene, params, storage, scratch, true)
+}
+
+/// [`build_depth_first`], greedy first when `greedy_first`; without it,
+/// the fair pass alone: the same tree whenever the greedy pass would run
+/// out of room (the job build knows so from its jobs).
+pub(super) fn one_pass<'a>(
+    scene: &Scene<'a>,
+    params: &KdParams,
+    storage: KdStorage<'a>,
+    scratch: KdScratch<'_>,
+    greedy_first: bool,
+) -> Result<KdTree<'a>, Error> {
     check_build(scene, params, &storage, &scratch)?;
     let mut b = Builder::new(*scene, params, storage, scratch.events, scratch.prim_flags);
     // Greedy first: the best tree whenever the room suffices. When it ran
     // out, the greedy tree has spent the room on whatever subtrees depth
     // first order reached first; build again sharing it fairly.
     let mut root = b.root_task();
-    b.run(root);
-    if b.truncated {
+    if greedy_first {
+        b.run(root);
+    }
+    if b.truncated || !greedy_first {
         b.restart_fair();
         root = b.root_task();
         b.run(root);
@@ -392,6 +413,7 @@ impl<'s, 'a> Builder<'s, 'a> {
             depth: 0,
             truncated: false,
             frontier_refs: 0,
+            refs_short: 0,
             fair: false,
         }
     }
@@ -750,13 +772,22 @@ impl<'s, 'a> Builder<'s, 'a> {
         if !self.params.sah_termination && nl == n && nr == n {
             return None;
         }
-        let frontier = (self.frontier_refs + nl + nr).saturating_sub(n);
+        // A straddler that rounding clips out of both children would
+        // shrink the frontier; such a node stays a leaf, so that the
+        // frontier never shrinks (see `frontier_refs`).
+        if nl + nr < n {
+            return None;
+        }
+        let frontier = self.frontier_refs + nl + nr - n;
         let fits = if self.fair {
             nl + nr <= task.ref_budget
         } else {
             frontier <= self.refs.len()
         };
         if !fits {
+            if !self.fair && self.refs_short == 0 {
+                self.refs_short = frontier;
+            }
             self.truncated = true;
             return None;
         }

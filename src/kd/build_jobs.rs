@@ -20,7 +20,7 @@
 //!
 //! Every split is decided by the node's own events, so the tree does not
 //! depend on how many threads ran the jobs or which: it is byte for byte
-//! [`build_depth_first`]'s whenever that one is not truncated (and the
+//! [`super::build_depth_first`]'s whenever that one is not truncated (and the
 //! untruncated tree when jobs fit where depth-first order ran out).
 //!
 //! ```text
@@ -29,7 +29,7 @@
 //! let tree = b.finish()?;
 //! ```
 
-use super::build::{build_depth_first, check_build, Builder, KdEvent, Made, Task, MAX_NODES};
+use super::build::{check_build, one_pass, Builder, KdEvent, Made, Task, MAX_NODES};
 use super::node::{KdNode, KD_MAX_DEPTH};
 use super::{KdParams, KdScratch, KdStorage, KdTree};
 use crate::geom::{Aabb, Scene};
@@ -96,6 +96,9 @@ struct JobDone {
     leaves: usize,
     refs: usize,
     depth: u32,
+    /// The frontier at which a job that ran out of its reference share
+    /// stopped (0 otherwise): its untruncated subtree needs at least this.
+    refs_short: usize,
 }
 
 /// A kd build between [`build_begin`] and [`KdBuild::finish`]: the top of
@@ -113,6 +116,8 @@ pub struct KdBuild<'s, 'a> {
     top_nodes: usize,
     /// The top ran out of room: `finish` builds in one pass.
     top_truncated: bool,
+    /// The top ran out of references: a greedy one pass would too.
+    top_refs_short: bool,
     root_voxel: Aabb,
     root_prims: usize,
 }
@@ -177,6 +182,7 @@ pub fn build_begin<'s, 'a>(
     }
     let top_nodes = b.node_top;
     let top_truncated = b.truncated;
+    let top_refs_short = b.refs_short > 0;
     let (mut storage, events, prim_flags) = b.into_parts();
     let specs_made = &mut specs[..count];
     place_events(events, specs_made);
@@ -191,6 +197,7 @@ pub fn build_begin<'s, 'a>(
         job_count: count,
         top_nodes,
         top_truncated,
+        top_refs_short,
         root_voxel: root.voxel,
         root_prims: root.prims,
     })
@@ -355,6 +362,7 @@ impl<'s, 'a> KdBuild<'s, 'a> {
             job_count,
             top_nodes,
             top_truncated,
+            top_refs_short,
             root_voxel,
             root_prims,
         } = self;
@@ -363,10 +371,12 @@ impl<'s, 'a> KdBuild<'s, 'a> {
             jobs: job_count,
             reruns: 0,
             one_pass: true,
+            fair_pass_only: top_truncated && top_refs_short,
         };
         if top_truncated {
-            let tree =
-                build_depth_first(&scene, &params, storage, KdScratch { events, prim_flags });
+            let scratch = KdScratch { events, prim_flags };
+            let greedy_first = !report.fair_pass_only;
+            let tree = one_pass(&scene, &params, storage, scratch, greedy_first);
             return Ok((tree?, report));
         }
         let (specs, done) = (&mut specs[..job_count], &mut done[..job_count]);
@@ -412,9 +422,11 @@ impl<'s, 'a> KdBuild<'s, 'a> {
                 Ok((made.into_tree(&scene, storage, params.ropes), report))
             }
             None => {
+                report.fair_pass_only = greedy_runs_out(specs, done, storage.refs.len());
                 let scratch = KdScratch { events, prim_flags };
+                let greedy_first = !report.fair_pass_only;
                 Ok((
-                    build_depth_first(&scene, &params, storage, scratch)?,
+                    one_pass(&scene, &params, storage, scratch, greedy_first)?,
                     report,
                 ))
             }
@@ -430,10 +442,33 @@ pub struct KdJobReport {
     /// Jobs that outgrew their shares (run again in `finish` unless
     /// `one_pass`).
     pub reruns: usize,
-    /// The tree was built again in one pass ([`build_depth_first`]): the
+    /// The tree was built again in one pass ([`super::build_depth_first`]): the
     /// top or a job ran out of room even in its second run, or most jobs
     /// outgrew their shares.
     pub one_pass: bool,
+    /// That pass shared the room fairly from the start, without the
+    /// greedy pass [`super::build_depth_first`] tries first: the top or the jobs
+    /// showed that the greedy pass would run out of references (the same
+    /// tree, one pass less).
+    pub fair_pass_only: bool,
+}
+
+/// Whether a greedy one-pass build must run out of references, judged by
+/// what the jobs met. The subtrees it would build are the jobs' untruncated
+/// ones, and each needs at least: what a job that fitted used, the frontier
+/// at which one ran out of its share, its own primitives otherwise (the
+/// frontier never shrinks). Their sum past the room cannot fit.
+fn greedy_runs_out(specs: &[JobSpec], done: &[JobDone], refs: usize) -> bool {
+    let need: usize = specs
+        .iter()
+        .zip(done)
+        .map(|(s, d)| match (d.fits, d.refs_short) {
+            (true, _) => d.refs,
+            (false, 0) => s.task.prims,
+            (false, short) => short,
+        })
+        .sum();
+    need > refs
 }
 
 /// The event scratch once the jobs ran: free below `limit`, the copies of
@@ -629,6 +664,7 @@ impl Layout<'_, '_, '_> {
             leaves: b.leaf_top,
             refs: b.ref_top,
             depth: b.depth,
+            refs_short: 0,
         };
         s.nodes.start = at.node;
         s.refs.start = at.re;
@@ -690,6 +726,7 @@ impl KdJob<'_> {
             leaves: b.leaf_top,
             refs: b.ref_top,
             depth: b.depth,
+            refs_short: b.refs_short,
         };
         Ok(())
     }
@@ -757,5 +794,52 @@ impl<'j> Iterator for KdJobs<'j> {
             events: &mut region[..s.working_events()],
             done: self.done.next()?,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The greedy pass is skipped only when what the jobs need at least
+    /// (a fitted job's references, a short job's frontier, else its
+    /// primitives) exceeds the room; at the room exactly it may fit.
+    #[test]
+    fn greedy_runs_out_when_the_jobs_need_more_than_the_room() {
+        let spec = |prims: usize| JobSpec {
+            task: Task {
+                node: 0,
+                depth: 0,
+                voxel: Aabb::EMPTY,
+                start: 0,
+                counts: [0; 3],
+                prims,
+                ref_budget: 0,
+            },
+            events: Share::default(),
+            copy: false,
+            nodes: Share::default(),
+            refs: Share::default(),
+        };
+        let fitted = |refs: usize| JobDone {
+            ran: true,
+            fits: true,
+            refs,
+            ..JobDone::default()
+        };
+        let short = |refs_short: usize| JobDone {
+            ran: true,
+            refs_short,
+            ..JobDone::default()
+        };
+        let specs = [spec(10), spec(20), spec(30)];
+        // 15 used + frontier 40 + 30 primitives (out of nodes or events).
+        let done = [fitted(15), short(40), short(0)];
+        assert!(greedy_runs_out(&specs, &done, 84));
+        assert!(!greedy_runs_out(&specs, &done, 85));
+        // Every job fitted: what they used.
+        let done = [fitted(15), fitted(25), fitted(35)];
+        assert!(greedy_runs_out(&specs, &done, 74));
+        assert!(!greedy_runs_out(&specs, &done, 75));
     }
 }
