@@ -11,7 +11,7 @@
 //! Structures refer to their parts by 32-bit indices, never by pointers, so a
 //! built tree can be copied, saved and traced at another address. Each
 //! family's `layout` module gives the byte layout of its arenas, which the
-//! C ABI (crate `coray-ffi`) carves. Feature `alloc` adds [`owned`]
+//! C ABI (crate `coray-ffi`) carves. Feature `alloc` adds `owned`
 //! storage for std users; feature `std` takes square roots from the
 //! compiler's intrinsic ([`geom::lanes::sqrt_rn`]).
 #![no_std]

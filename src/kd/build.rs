@@ -912,8 +912,7 @@ impl<'s, 'a> Builder<'s, 'a> {
     /// The old events are partitioned first, without a branch on their
     /// side (whose outcome is a coin toss a predictor cannot learn): each
     /// is stored at its side's cursor, a dropped one back in its own slot.
-    /// The few new events then go in from the back, each after a binary
-    /// search, moving the old ones above it in one block.
+    /// The new events then go in from the back ([`merge_from_back`]).
     fn merge(
         &mut self,
         (s, e): (usize, usize),
@@ -947,7 +946,9 @@ impl<'s, 'a> Builder<'s, 'a> {
 /// Merges the sorted events `new` into the sorted events `[start, end)`,
 /// which have room after them for as many; returns the merged run's end.
 /// An old event goes before a new one it ties with. `new` lies outside
-/// `[start, end + new's length)`.
+/// `[start, end + new's length)`. Few new events (a split's straddlers,
+/// mostly) go in each after a binary search, moving the old ones above it
+/// in one block; many, one step per event.
 fn merge_from_back(
     events: &mut [KdEvent],
     start: usize,
