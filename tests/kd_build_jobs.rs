@@ -286,6 +286,51 @@ fn jobs_that_show_the_room_too_small_skip_the_greedy_pass() {
     assert_eq!(m.info.flags & KD_FLAG_TRUNCATED, 0, "{report:?}");
 }
 
+/// Whatever the reference room, from far too little to plenty, the job
+/// build is the depth-first build's tree: the greedy pass is skipped only
+/// where it would have run out (and it is, on some of these rooms; on
+/// others the one pass runs greedy first, or the jobs make the tree).
+#[test]
+fn job_build_equals_depth_first_at_every_room() {
+    let mut rng = Rng(23);
+    let params = KdParams::auto();
+    let (mut skipped, mut greedy, mut jobs) = (0, 0, 0);
+    for (tris, spheres, cones) in [(1500, 0, 0), (800, 200, 100), (2500, 0, 0)] {
+        let o = random_scene(&mut rng, tris, spheres, cones, 10.0);
+        let scene = o.scene();
+        let n = scene.prim_count();
+        let ideal = kd::requirements(n, &params);
+        // References from 1.1 to 6 per primitive; nodes as many as the
+        // ideal room has, or only two per primitive (jobs then run out of
+        // nodes, which proves nothing about references).
+        // And exactly the references the untruncated tree holds: the
+        // greedy pass fits there, however many jobs outgrow their shares.
+        let exact = depth_first(&scene, &params, &ideal).info.ref_count as usize;
+        let rooms = [11, 13, 16, 20, 25, 30, 40, 60]
+            .map(|t| [(n * t / 10, ideal.nodes), (n * t / 10, 2 * n)]);
+        for (refs, nodes) in rooms.into_iter().flatten().chain([(exact, ideal.nodes)]) {
+            let req = KdRequirements {
+                refs,
+                nodes,
+                events: ideal.events.max(kd::EVENTS_PER_REF * refs),
+                ..ideal
+            };
+            let reference = depth_first(&scene, &params, &req);
+            let (m, report) = by_jobs(&scene, &params, &req, Run::ByFinish);
+            assert!(m == reference, "{tris} {refs}: {report:?}");
+            match (report.one_pass, report.fair_pass_only) {
+                (true, true) => skipped += 1,
+                (true, false) => greedy += 1,
+                _ => jobs += 1,
+            }
+        }
+    }
+    assert!(
+        skipped > 0 && greedy > 0 && jobs > 0,
+        "{skipped} {greedy} {jobs}"
+    );
+}
+
 /// With references for the tree and barely more, shares in proportion to
 /// primitives are too small for some jobs; `finish` runs those again in
 /// the room the others left, and the tree is still the one-pass build's.
