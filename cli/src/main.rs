@@ -245,7 +245,7 @@ fn render_spd(
 /// The paper tables of `bench --table`, with what each shows: the help
 /// text and the error list both come from here.
 const TABLES: [(&str, &str); 8] = [
-    ("build", "build ms and bytes per primitive of kd-auto, kd-paper, tdbs-sah and Embree (1 thread and --threads N), builders interleaved; SCENE as for speed"),
+    ("build", "build ms and bytes per primitive of kd-auto, kd-paper, tdbs-sah, wide and Embree (1 thread and --threads N), builders interleaved, and the primary rays at --res through kd-auto's tree and Embree's; SCENE as for speed"),
     ("speed", "every method's Mrays/s per ray set against Embree's one-ray and packet calls; SCENE a list, `spd:all` or default the eight SPD scenes and random; at 1 thread and at --threads N"),
     ("lcts", "Havran and Bittner's Table 2: SCENE may be a comma-separated list, or `spd:all`"),
     ("lcts-res", "their Table 3: SCENE (default spd:teapot) at 256 to --max-res pixels square"),
