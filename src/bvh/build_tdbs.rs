@@ -224,15 +224,16 @@ fn sweep(
 /// long as `run`).
 fn partition(run: &mut [u32], spare: &mut [u32], left: impl Fn(u32) -> bool) {
     let (mut l, mut r) = (0, 0);
+    // Without a branch on the side (a coin toss a predictor cannot
+    // learn): each element is written to both places and one cursor
+    // moves; `run[l]` is never past the element being read.
     for i in 0..run.len() {
         let p = run[i];
-        if left(p) {
-            run[l] = p;
-            l += 1;
-        } else {
-            spare[r] = p;
-            r += 1;
-        }
+        let goes_left = left(p);
+        run[l] = p;
+        spare[r] = p;
+        l += goes_left as usize;
+        r += !goes_left as usize;
     }
     run[l..].copy_from_slice(&spare[..r]);
 }
