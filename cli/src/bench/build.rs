@@ -72,16 +72,8 @@ fn trace_primary(s: &crate::scene::SceneData, repeat: usize) -> Result<Vec<Trace
     use super::harness::trace;
     use super::row::{judge_closest, tally};
     use crate::built::{Built, Visit};
-    use crate::method::{EmbreeCall, Method};
     use crate::shoot::Shooter;
-    let mut methods: Vec<Method> = TRACE_METHODS
-        .iter()
-        .map(|m| Method::parse(m).expect("registered"))
-        .collect();
-    if cfg!(feature = "embree") {
-        methods.push(Method::Embree(EmbreeCall::One));
-        methods.push(Method::Embree(EmbreeCall::Eight));
-    }
+    let methods = super::speed::with_embree(&TRACE_METHODS);
     let built: Vec<Built> = methods
         .iter()
         .map(|&m| Built::new(m, &s.mesh, Preset::Auto, 1))

@@ -128,13 +128,11 @@ impl Visit for TimeSet<'_> {
     }
 }
 
-/// Runs the speed table on one scene at each thread count.
-pub fn run(
-    s: &SceneData,
-    set: &Settings,
-    thread_counts: &[usize],
-) -> Result<Vec<SpeedRow>, String> {
-    let mut methods: Vec<Method> = RAY_METHODS
+/// The methods named (each registered), then Embree's one-ray and packet
+/// calls when the build has them: the rows every table sets beside
+/// Embree's.
+pub fn with_embree(names: &[&str]) -> Vec<Method> {
+    let mut methods: Vec<Method> = names
         .iter()
         .map(|m| Method::parse(m).expect("registered"))
         .collect();
@@ -142,6 +140,16 @@ pub fn run(
         methods.push(Method::Embree(EmbreeCall::One));
         methods.push(Method::Embree(EmbreeCall::Eight));
     }
+    methods
+}
+
+/// Runs the speed table on one scene at each thread count.
+pub fn run(
+    s: &SceneData,
+    set: &Settings,
+    thread_counts: &[usize],
+) -> Result<Vec<SpeedRow>, String> {
+    let methods = with_embree(&RAY_METHODS);
     let threads_max = thread_counts.iter().copied().max().unwrap_or(1);
     let built: Vec<Built> = methods
         .iter()
