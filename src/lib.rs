@@ -47,5 +47,5 @@ pub mod wide;
 
 pub use accel::{Accel, Shape};
 pub use error::Error;
-pub use geom::{Aabb, Camera, Cone, Hit, Ray, Scene, Sphere, Vec3};
+pub use geom::{Aabb, Camera, Cone, Corners4, Hit, Ray, Scene, Sphere, Vec3};
 pub use stats::TraceStats;

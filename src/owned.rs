@@ -275,6 +275,7 @@ impl OwnedBvh {
 pub struct OwnedWide {
     nodes: Vec<WideNode>,
     refs: Vec<u32>,
+    corners: Vec<crate::geom::Corners4>,
     bvh_nodes: Vec<BvhNode>,
     boxes: Vec<Aabb>,
     keys: Vec<f32>,
@@ -289,6 +290,7 @@ impl OwnedWide {
         OwnedWide {
             nodes: vec![WideNode::default(); r.nodes],
             refs: vec![0; r.refs],
+            corners: vec![wide::corners::NAN_BLOCK; r.corners],
             bvh_nodes: vec![BvhNode::default(); r.bvh_nodes],
             boxes: vec![Aabb::EMPTY; r.boxes],
             keys: vec![0.0; r.keys],
@@ -306,6 +308,7 @@ impl OwnedWide {
             wide::WideStorage {
                 nodes: &mut self.nodes,
                 refs: &mut self.refs,
+                corners: &mut self.corners,
             },
             wide::WideScratch {
                 bvh_nodes: &mut self.bvh_nodes,
@@ -331,7 +334,7 @@ impl OwnedWide {
 
     /// The built hierarchy over `scene` (the scene it was built on).
     pub fn view<'a>(&'a self, scene: Scene<'a>) -> Result<WideBvh<'a>, Error> {
-        WideBvh::from_parts(scene, &self.nodes, &self.refs, self.info)
+        WideBvh::from_parts(scene, &self.nodes, &self.refs, &self.corners, self.info)
     }
 
     /// What the build made.
@@ -339,15 +342,29 @@ impl OwnedWide {
         &self.info
     }
 
-    /// Bytes of the nodes in use and the references.
+    /// Bytes of the nodes in use, the references and their corner blocks.
     pub fn bytes(&self) -> usize {
+        let refs = self.info.ref_count as usize;
         self.info.node_count as usize * core::mem::size_of::<WideNode>()
-            + self.info.ref_count as usize * 4
+            + refs * 4
+            + wide::corners::blocks_for(refs) * core::mem::size_of::<crate::geom::Corners4>()
     }
 
     /// The parts, to corrupt in tests.
-    pub fn parts_mut(&mut self) -> (&mut [WideNode], &mut [u32], &mut WideInfo) {
-        (&mut self.nodes, &mut self.refs, &mut self.info)
+    pub fn parts_mut(
+        &mut self,
+    ) -> (
+        &mut [WideNode],
+        &mut [u32],
+        &mut [crate::geom::Corners4],
+        &mut WideInfo,
+    ) {
+        (
+            &mut self.nodes,
+            &mut self.refs,
+            &mut self.corners,
+            &mut self.info,
+        )
     }
 }
 

@@ -692,10 +692,10 @@ fn wide_random_words() {
         let mut rng = Rng(14);
         let mut accepted = 0;
         for _ in 0..300 {
-            let (part, pick, value) = (rng.below(4), rng.next_u64(), rng.next_u64() as u32);
+            let (part, pick, value) = (rng.below(5), rng.next_u64(), rng.next_u64() as u32);
             let small = rng.below(40) as u32;
             accepted += wide_cases(&s, &rays, "random word", |w| {
-                let (nodes, refs, info) = w.parts_mut();
+                let (nodes, refs, corners, info) = w.parts_mut();
                 let slot = (pick >> 20) as usize % 4;
                 match part {
                     0 => {
@@ -713,6 +713,14 @@ fn wide_random_words() {
                     }
                     1 => refs[(pick % refs.len().max(1) as u64) as usize] = small,
                     2 => refs[(pick % refs.len().max(1) as u64) as usize] = value,
+                    3 => {
+                        let b = &mut corners[(pick % corners.len().max(1) as u64) as usize];
+                        let (k, a) = ((pick >> 8) as usize % 3, (pick >> 12) as usize % 3);
+                        b[k][a][slot] = match pick >> 40 & 1 {
+                            0 => f32::from_bits(value),
+                            _ => b[k][a][slot] + small as f32 * 0.25,
+                        };
+                    }
                     _ => match pick >> 40 & 3 {
                         0 => info.depth = value % 64,
                         1 => info.node_count = value % (2 * info.node_count + 2),
@@ -723,7 +731,7 @@ fn wide_random_words() {
             });
         }
         // A few corruptions leave values as they were; the rest are refused.
-        assert!(accepted < 60, "{accepted} of 600 corruptions accepted");
+        assert!(accepted < 80, "{accepted} of 600 corruptions accepted");
     });
 }
 
@@ -736,7 +744,7 @@ fn wide_cycle_and_reference_past_the_scene() {
         let n = s.scene().prim_count() as u32;
         assert_eq!(
             wide_cases(&s, &rays(), "cycle", |w| {
-                let (nodes, _, info) = w.parts_mut();
+                let (nodes, _, _, info) = w.parts_mut();
                 let last = info.node_count as usize - 1;
                 let slot = nodes[last].child.iter().position(|&c| c & (1 << 31) == 0);
                 nodes[last].child[slot.unwrap_or(0)] = 0;
@@ -747,7 +755,7 @@ fn wide_cycle_and_reference_past_the_scene() {
         for bad in [n, n + 2, u32::MAX] {
             assert_eq!(
                 wide_cases(&s, &rays(), "reference past the scene", |w| {
-                    let (_, refs, _) = w.parts_mut();
+                    let (_, refs, _, _) = w.parts_mut();
                     refs[0] = bad;
                 }),
                 0

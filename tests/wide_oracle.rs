@@ -110,6 +110,66 @@ fn every_leaf_size_matches_the_oracle_and_the_kd_tree() {
     }
 }
 
+/// Leaf entries: how many, how many of two slots or more, and how many
+/// span more blocks of four slots than their length needs.
+fn straddling_runs(w: &WideBvh) -> (usize, usize, usize) {
+    let (mut runs, mut long, mut extra) = (0, 0, 0);
+    for nd in w.parts().0 {
+        for i in 0..nd.len() {
+            if nd.child[i] & wide::LEAF_BIT != 0 {
+                let f = (nd.child[i] & !wide::LEAF_BIT) as usize;
+                let len = nd.count[i] as usize;
+                runs += 1;
+                long += usize::from(len > 1);
+                extra += usize::from((f + len).div_ceil(4) - f / 4 > len.div_ceil(4));
+            }
+        }
+    }
+    (runs, long, extra)
+}
+
+/// On SPD scenes whose leaves hold two to four triangles, leaf runs are
+/// placed so that none spans more blocks of corners than it needs (in
+/// build order, a quarter of them would), and the hierarchy still traces
+/// as the kd-tree.
+#[test]
+fn leaf_runs_fill_their_blocks_on_spd_scenes() {
+    for name in ["teapot", "gears"] {
+        let nff = coray_scenes::spd::generate(name, Some(2), &Default::default()).unwrap();
+        let mesh = coray_scenes::SceneMesh::from_nff(&nff);
+        let scene = mesh.scene();
+        let owned = OwnedWide::new(&scene, 4).unwrap();
+        let w = owned.view(scene).unwrap();
+        w.validate().unwrap();
+        let (runs, long, extra) = straddling_runs(&w);
+        assert!(
+            long * 2 > runs,
+            "{name}: {long} of {runs} runs longer than one"
+        );
+        assert_eq!(extra, 0, "{name}: {extra} of {runs} runs straddle");
+        let kd = OwnedKd::new(&scene, &KdParams::auto()).unwrap();
+        // Rays between two points of the scene's box.
+        let mut rng = Rng(5);
+        let b = scene.bounds();
+        let mut point = || {
+            let f = Vec3::new(
+                rng.range(0.0, 1.0),
+                rng.range(0.0, 1.0),
+                rng.range(0.0, 1.0),
+            );
+            b.min + (b.max - b.min) * f
+        };
+        let rays: Vec<Ray> = (0..2000)
+            .map(|_| {
+                let o = point();
+                Ray::new(o, point() - o, 0.0, f32::INFINITY)
+            })
+            .collect();
+        let hits = check(&w, &kd.tree(scene).unwrap(), &rays, name);
+        assert!(hits > 500, "{name}: {hits} hits");
+    }
+}
+
 /// Rays whose box tests fall exactly on a face: the parallel-axis test
 /// takes a face as inside (1 / 0 = inf would make 0 * inf NaN there).
 #[test]
@@ -217,16 +277,18 @@ fn grid_counts() {
     assert!(w.parts().0.iter().all(|n| n.len() == WIDTH || n.len() == 2));
 }
 
-/// A build fits in exactly the requirements and refuses one node less.
+/// A build fits in exactly the requirements and refuses one node or one
+/// block of corners less.
 #[test]
 fn exact_fit_and_one_less() {
     let mut rng = Rng(8);
     let o = random_scene(&mut rng, 300, 40, 40, 5.0);
     let scene = o.scene();
     let req = wide::requirements(scene.prim_count());
-    for less in [0, 1] {
-        let mut nodes = vec![WideNode::default(); req.nodes - less];
+    for (less_nodes, less_corners) in [(0, 0), (1, 0), (0, 1)] {
+        let mut nodes = vec![WideNode::default(); req.nodes - less_nodes];
         let mut refs = vec![0u32; req.refs];
+        let mut corners = vec![wide::corners::NAN_BLOCK; req.corners - less_corners];
         let mut bvh_nodes = vec![coray::bvh::BvhNode::default(); req.bvh_nodes];
         let mut boxes = vec![Aabb::EMPTY; req.boxes];
         let mut keys = vec![0.0; req.keys];
@@ -237,6 +299,7 @@ fn exact_fit_and_one_less() {
             WideStorage {
                 nodes: &mut nodes,
                 refs: &mut refs,
+                corners: &mut corners,
             },
             WideScratch {
                 bvh_nodes: &mut bvh_nodes,
@@ -245,15 +308,22 @@ fn exact_fit_and_one_less() {
                 links: &mut links,
             },
         );
-        match less {
-            0 => {
+        match (less_nodes, less_corners) {
+            (0, 0) => {
                 let w = r.unwrap();
                 w.validate().unwrap();
                 assert!(w.info().node_count as usize <= req.nodes);
             }
-            _ => assert!(matches!(
+            (1, _) => assert!(matches!(
                 r.map(|_| ()),
                 Err(Error::SliceTooSmall { slice: "nodes", .. })
+            )),
+            _ => assert!(matches!(
+                r.map(|_| ()),
+                Err(Error::SliceTooSmall {
+                    slice: "corners",
+                    ..
+                })
             )),
         }
     }

@@ -51,6 +51,7 @@ unsafe impl Plain for coray::bvh::layout::BvhArenaHeader {}
 unsafe impl Plain for coray::proj::layout::ProjArenaHeader {}
 unsafe impl Plain for coray::proj::Rect {}
 unsafe impl Plain for coray::wide::WideNode {}
+unsafe impl Plain for coray::Corners4 {}
 unsafe impl Plain for coray::wide::WideStackItem {}
 unsafe impl Plain for coray::wide::layout::WideArenaHeader {}
 
@@ -74,6 +75,7 @@ const _: () = {
     assert!(size_of::<coray::bvh::layout::BvhArenaHeader>() == 124);
     assert!(size_of::<coray::proj::layout::ProjArenaHeader>() == 128);
     assert!(size_of::<coray::proj::Rect>() == 20 && align_of::<coray::proj::Rect>() == 4);
+    assert!(size_of::<coray::Corners4>() == 144 && align_of::<coray::Corners4>() == 4);
     assert!(
         size_of::<coray::wide::WideNode>() == 128
             && align_of::<coray::wide::WideNode>() <= ARENA_ALIGN

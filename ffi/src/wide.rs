@@ -16,7 +16,7 @@ use coray::wide::layout::{
     WIDE_VERSION,
 };
 use coray::wide::{self, WideBvh, WideNode, WideStackItem, WIDTH};
-use coray::{Aabb, Scene, TraceStats};
+use coray::{Aabb, Corners4, Scene, TraceStats};
 use core::ffi::c_void;
 use core::mem::size_of;
 
@@ -200,19 +200,24 @@ pub unsafe extern "C" fn coray_wide_build(
         // its arena (checked above), its parts do not overlap (layout
         // formulas) and the arenas overlap neither each other nor the
         // scene (Regions); the caller lends both exclusively for the call.
-        let (header, nodes, refs, boxes, keys, links, bvh_nodes) = unsafe {
+        let (header, nodes, refs, corners, boxes, keys, links, bvh_nodes) = unsafe {
             carve::zero(base, arena_l.total_bytes);
             (
                 carve::arena_mut::<WideArenaHeader>(base, 0, 1),
                 carve::arena_mut::<WideNode>(base, arena_l.nodes_offset, arena_l.nodes),
                 carve::arena_mut::<u32>(base, arena_l.refs_offset, arena_l.refs),
+                carve::arena_mut::<Corners4>(base, arena_l.corners_offset, arena_l.corners),
                 carve::arena_mut::<Aabb>(sbase, 0, c.boxes),
                 carve::arena_mut::<f32>(sbase, scratch_l.keys_offset, c.keys),
                 carve::arena_mut::<u32>(sbase, scratch_l.links_offset, c.links),
                 carve::arena_mut::<BvhNode>(sbase, scratch_l.bvh_nodes_offset, c.bvh_nodes),
             )
         };
-        let storage = wide::WideStorage { nodes, refs };
+        let storage = wide::WideStorage {
+            nodes,
+            refs,
+            corners,
+        };
         let scratch = wide::WideScratch {
             bvh_nodes,
             boxes,
@@ -273,6 +278,7 @@ pub unsafe extern "C" fn coray_wide_open(
         hd.set_part::<WideArenaHeader>(0, 0, 1)?;
         hd.set_part::<WideNode>(1, l.nodes_offset, l.nodes)?;
         hd.set_part::<u32>(2, l.refs_offset, l.refs)?;
+        hd.set_part::<Corners4>(3, l.corners_offset, l.corners)?;
         let words = hd.words();
         // SAFETY: the handle describes the arena just checked, readable.
         unsafe { view_of(Sealed::new(&words, KIND_WIDE)?, scene)? };
@@ -293,7 +299,13 @@ unsafe fn view_of<'a>(
     // at open), readable by the caller's contract.
     unsafe {
         let header = h.part::<WideArenaHeader>(0)[0];
-        let w = WideBvh::from_parts(scene, h.part::<WideNode>(1), h.part::<u32>(2), header.info)?;
+        let w = WideBvh::from_parts(
+            scene,
+            h.part::<WideNode>(1),
+            h.part::<u32>(2),
+            h.part::<Corners4>(3),
+            header.info,
+        )?;
         Ok((header, w))
     }
 }

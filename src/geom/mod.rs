@@ -4,6 +4,7 @@ mod aabb;
 mod camera;
 mod cone;
 pub mod lanes;
+pub(crate) mod leaf;
 mod ray;
 mod scene;
 mod sphere;
@@ -16,4 +17,6 @@ pub use glam::Vec3;
 pub use ray::{Hit, PreparedRay, Ray, INVALID_ID};
 pub use scene::{Scene, GEOM_CONES, GEOM_SPHERES, GEOM_TRIANGLES};
 pub use sphere::Sphere;
-pub use triangle::{clip_triangle_bounds, intersect_triangle};
+pub use triangle::{
+    clip_triangle_bounds, intersect_triangle, intersect_triangles4, Corners4, Hits4, TRI_LANES,
+};

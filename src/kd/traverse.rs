@@ -77,13 +77,7 @@ impl LeafVisitor for Closest {
     }
 }
 
-/// Two primitives hit at exactly the same t: the lower global index wins
-/// (triangles, then spheres, then cones), so every traversal order, and so
-/// every structure, reports the same primitive.
-#[inline]
-pub(crate) fn tie_wins(h: &Hit, best: &Hit) -> bool {
-    h.t == best.t && (h.geom_id, h.prim_id) < (best.geom_id, best.prim_id)
-}
+pub(crate) use crate::geom::leaf::tie_wins;
 
 /// Whether a hit at `t` lies clearly before a leaf's exit at `exit_t`, by
 /// more than the rounding of either ([`crate::tolerance::LEAF_EXIT_MARGIN`]

@@ -1,5 +1,5 @@
 //! Byte layouts of wide hierarchy arenas: `[WideArenaHeader | refs |
-//! nodes]`, and `[boxes | keys | links | binary nodes]` for the build's
+//! corners | nodes]`, and `[boxes | keys | links | binary nodes]` for the build's
 //! scratch. Counts in, bytes out, checked ([`crate::arena::Parts`]).
 //!
 //! The nodes come last because their count is known only after the build
@@ -12,6 +12,7 @@
 use super::{WideInfo, WideNode, WideRequirements};
 use crate::arena::Parts;
 use crate::bvh::BvhNode;
+use crate::geom::Corners4;
 use crate::{Aabb, Error};
 use core::mem::size_of;
 
@@ -20,8 +21,9 @@ pub const WIDE_HEADER_BYTES: usize = 128;
 
 /// Magic word of a wide hierarchy arena: "CRWB".
 pub const WIDE_MAGIC: u32 = u32::from_le_bytes(*b"CRWB");
-/// Layout version of [`WideArenaHeader`] and [`WideNode`].
-pub const WIDE_VERSION: u32 = 1;
+/// Layout version of [`WideArenaHeader`] and [`WideNode`] (2: the
+/// triangles' corners after the references).
+pub const WIDE_VERSION: u32 = 2;
 
 /// Where the parts of a wide hierarchy arena lie.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -30,10 +32,14 @@ pub struct WideArenaLayout {
     pub nodes: usize,
     /// Reference slots.
     pub refs: usize,
+    /// Corner blocks: [`super::corners::blocks_for`] `refs`.
+    pub corners: usize,
     /// Offset of the nodes.
     pub nodes_offset: usize,
     /// Offset of the references.
     pub refs_offset: usize,
+    /// Offset of the corner blocks.
+    pub corners_offset: usize,
     /// Bytes the layout covers.
     pub total_bytes: usize,
 }
@@ -44,13 +50,17 @@ impl WideArenaLayout {
     pub fn of(nodes: usize, refs: usize) -> Option<WideArenaLayout> {
         const _: () = assert!(size_of::<WideArenaHeader>() <= WIDE_HEADER_BYTES);
         let mut p = Parts::after(WIDE_HEADER_BYTES);
+        let corners = super::corners::blocks_for(refs);
         let refs_offset = p.push::<u32>(refs)?;
+        let corners_offset = p.push::<Corners4>(corners)?;
         let nodes_offset = p.push::<WideNode>(nodes)?;
         Some(WideArenaLayout {
             nodes,
             refs,
+            corners,
             nodes_offset,
             refs_offset,
+            corners_offset,
             total_bytes: p.total()?,
         })
     }
@@ -148,14 +158,17 @@ mod tests {
     fn layouts_are_checked_and_aligned() {
         let l = WideArenaLayout::of(3, 5).unwrap();
         assert_eq!(l.refs_offset, WIDE_HEADER_BYTES);
-        // The references (20 bytes) padded to the nodes' 16-byte alignment.
-        assert_eq!(l.nodes_offset, WIDE_HEADER_BYTES + 32);
+        // The references (20 bytes) padded to 16 bytes, two blocks of
+        // corners (2 x 144 bytes) for their 5 slots.
+        assert_eq!(l.corners, 2);
+        assert_eq!(l.corners_offset, WIDE_HEADER_BYTES + 32);
+        assert_eq!(l.nodes_offset, l.corners_offset + 2 * 144);
         assert_eq!(l.total_bytes, l.nodes_offset + 3 * 128);
         // Fewer nodes: a prefix of the same arena.
         let fewer = WideArenaLayout::of(1, 5).unwrap();
         assert_eq!(
-            (fewer.refs_offset, fewer.nodes_offset),
-            (l.refs_offset, l.nodes_offset)
+            (fewer.refs_offset, fewer.corners_offset, fewer.nodes_offset),
+            (l.refs_offset, l.corners_offset, l.nodes_offset)
         );
         assert_eq!(fewer.total_bytes, l.total_bytes - 2 * 128);
         assert!(WideArenaLayout::of(usize::MAX / 256, 1).is_none());

@@ -14,8 +14,10 @@
 //! The caller owns the traversal stack ([`WideBvh::stack_len`]).
 
 mod build;
+pub mod corners;
 pub mod layout;
 mod node;
+mod pack;
 mod traverse;
 mod validate;
 
@@ -23,7 +25,7 @@ pub use node::{WideNode, EMPTY_SLOT, LEAF_BIT, WIDTH};
 pub use traverse::WideStackItem;
 
 use crate::bvh::{self, BvhNode, BvhScratch, BvhStorage};
-use crate::geom::{Aabb, Scene};
+use crate::geom::{Aabb, Corners4, Scene};
 use crate::Error;
 
 /// Element counts of the slices a build needs. `nodes` and `refs` are the
@@ -35,6 +37,9 @@ pub struct WideRequirements {
     pub nodes: usize,
     /// Primitive references (`u32`), one per primitive.
     pub refs: usize,
+    /// Blocks of four reference slots' triangle corners
+    /// ([`corners::blocks_for`] `refs`).
+    pub corners: usize,
     /// Scratch: the binary hierarchy's [`BvhNode`]s.
     pub bvh_nodes: usize,
     /// Scratch: primitive boxes.
@@ -51,6 +56,7 @@ pub fn requirements(prim_count: usize) -> WideRequirements {
     WideRequirements {
         nodes: prim_count.saturating_sub(1).max(1),
         refs: b.refs,
+        corners: corners::blocks_for(b.refs),
         bvh_nodes: b.nodes,
         boxes: b.boxes,
         keys: b.keys,
@@ -64,6 +70,8 @@ pub struct WideStorage<'a> {
     pub nodes: &'a mut [WideNode],
     /// At least [`WideRequirements::refs`].
     pub refs: &'a mut [u32],
+    /// At least [`WideRequirements::corners`].
+    pub corners: &'a mut [Corners4],
 }
 
 /// Build scratch; free to reuse once the build returns.
@@ -110,6 +118,7 @@ pub struct WideBvh<'a> {
     pub(crate) scene: Scene<'a>,
     pub(crate) nodes: &'a [WideNode],
     pub(crate) refs: &'a [u32],
+    pub(crate) corners: &'a [Corners4],
     pub(crate) info: WideInfo,
 }
 
@@ -135,14 +144,19 @@ pub fn build<'a>(
     scratch: WideScratch,
 ) -> Result<WideBvh<'a>, Error> {
     let req = requirements(scene.prim_count());
-    if storage.nodes.len() < req.nodes {
-        return Err(Error::SliceTooSmall {
-            slice: "nodes",
-            needed: req.nodes,
-            got: storage.nodes.len(),
-        });
+    for (slice, needed, got) in [
+        ("nodes", req.nodes, storage.nodes.len()),
+        ("corners", req.corners, storage.corners.len()),
+    ] {
+        if got < needed {
+            return Err(Error::SliceTooSmall { slice, needed, got });
+        }
     }
-    let WideStorage { nodes, refs } = storage;
+    let WideStorage {
+        nodes,
+        refs,
+        corners,
+    } = storage;
     let (collapsed, binary) = {
         let b = bvh::build_sah_leaves(
             scene,
@@ -155,12 +169,26 @@ pub fn build<'a>(
             BvhScratch {
                 boxes: scratch.boxes,
                 keys: scratch.keys,
-                links: scratch.links,
+                links: &mut *scratch.links,
                 clusters: &mut [],
             },
         )?;
         (build::collapse(&b, nodes)?, *b.info())
     };
+    let refs = &mut refs[..binary.ref_count as usize];
+    if !pack::pack_leaves(&mut nodes[..collapsed.nodes], refs, scratch.links) {
+        return Err(Error::Corrupt {
+            what: "leaf entries",
+        });
+    }
+    let refs = &*refs;
+    if !corners::fill(scene, refs, corners) {
+        return Err(Error::SliceTooSmall {
+            slice: "corners",
+            needed: corners::blocks_for(refs.len()),
+            got: corners.len(),
+        });
+    }
     let info = WideInfo {
         node_count: collapsed.nodes as u32,
         leaf_count: collapsed.leaves as u32,
@@ -172,7 +200,8 @@ pub fn build<'a>(
     Ok(WideBvh {
         scene: *scene,
         nodes: &nodes[..collapsed.nodes],
-        refs: &refs[..binary.ref_count as usize],
+        refs,
+        corners: &corners[..corners::blocks_for(refs.len())],
         info,
     })
 }
@@ -187,12 +216,14 @@ impl<'a> WideBvh<'a> {
         scene: Scene<'a>,
         nodes: &'a [WideNode],
         refs: &'a [u32],
+        corners: &'a [Corners4],
         info: WideInfo,
     ) -> Result<WideBvh<'a>, Error> {
         let i = &info;
         if i.node_count == 0
             || i.node_count as usize > nodes.len()
             || i.ref_count as usize > refs.len()
+            || corners::blocks_for(i.ref_count as usize) > corners.len()
             || i.depth >= i.node_count
         {
             return Err(Error::Corrupt { what: "counts" });
@@ -201,6 +232,7 @@ impl<'a> WideBvh<'a> {
             scene,
             nodes: &nodes[..i.node_count as usize],
             refs: &refs[..i.ref_count as usize],
+            corners: &corners[..corners::blocks_for(i.ref_count as usize)],
             info,
         })
     }

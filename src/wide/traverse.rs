@@ -11,8 +11,7 @@
 use super::node::{WideNode, EMPTY_SLOT, LEAF_BIT, WIDTH};
 use super::WideBvh;
 use crate::bvh::traverse::{push_nearest_last, Entered};
-use crate::geom::{Hit, PreparedRay, Ray, Scene};
-use crate::kd::traverse::tie_wins;
+use crate::geom::{leaf, Hit, PreparedRay, Ray};
 use crate::TraceStats;
 
 /// A traversal stack entry: a node's entry (an interior child, or a leaf's
@@ -38,8 +37,16 @@ trait Query {
     const SORTED: bool;
     /// Boxes entered beyond this are skipped.
     fn limit(&self) -> f32;
-    /// Tests a leaf's primitives; true stops the walk.
-    fn visit(&mut self, scene: &Scene, r: &PreparedRay, refs: &[u32]) -> bool;
+    /// Tests the primitives of reference slots `[first, first + count)`
+    /// of `w` (`others`: the scene has spheres or cones); `Some(true)`
+    /// stops the walk, `None` is a slot past the hierarchy's slices.
+    fn visit(
+        &mut self,
+        w: &WideBvh,
+        r: &PreparedRay,
+        run: (usize, usize),
+        others: bool,
+    ) -> Option<bool>;
 }
 
 struct Closest {
@@ -57,17 +64,20 @@ impl Query for Closest {
         self.limit
     }
     #[inline(always)]
-    fn visit(&mut self, scene: &Scene, r: &PreparedRay, refs: &[u32]) -> bool {
-        for &p in refs {
-            self.tests += 1;
-            if let Some(h) = scene.intersect_prim(p as usize, r, self.limit) {
-                if !self.best.is_hit() || h.t < self.best.t || tie_wins(&h, &self.best) {
-                    self.best = h;
-                    self.limit = h.t;
-                }
-            }
+    fn visit(
+        &mut self,
+        w: &WideBvh,
+        r: &PreparedRay,
+        run: (usize, usize),
+        others: bool,
+    ) -> Option<bool> {
+        self.tests += run.1 as u64;
+        let (scene, refs, blocks) = (&w.scene, w.refs, w.corners);
+        let whole = leaf::closest_in_blocks(scene, r, refs, blocks, run, others, &mut self.best);
+        if self.best.is_hit() {
+            self.limit = self.best.t;
         }
-        false
+        whole.then_some(false)
     }
 }
 
@@ -84,15 +94,17 @@ impl Query for Any {
         self.t_max
     }
     #[inline(always)]
-    fn visit(&mut self, scene: &Scene, r: &PreparedRay, refs: &[u32]) -> bool {
-        for &p in refs {
-            self.tests += 1;
-            if scene.intersect_prim(p as usize, r, self.t_max).is_some() {
-                self.hit = true;
-                return true;
-            }
-        }
-        false
+    fn visit(
+        &mut self,
+        w: &WideBvh,
+        r: &PreparedRay,
+        run: (usize, usize),
+        others: bool,
+    ) -> Option<bool> {
+        self.tests += run.1 as u64;
+        let (scene, refs, blocks) = (&w.scene, w.refs, w.corners);
+        self.hit = leaf::any_in_blocks(scene, r, refs, blocks, run, others, self.t_max)?;
+        Some(self.hit)
     }
 }
 
@@ -234,6 +246,7 @@ impl WideBvh<'_> {
         // The nearest entry a node pushed is visited next without going
         // through the stack (and a lone one is never written to it).
         let mut next: Option<WideStackItem> = None;
+        let others = !(self.scene.spheres.is_empty() && self.scene.cones.is_empty());
         loop {
             let it = match next.take() {
                 Some(it) => it,
@@ -256,19 +269,15 @@ impl WideBvh<'_> {
             budget -= 1;
             if it.child & LEAF_BIT != 0 {
                 leaves += 1;
-                let first = (it.child & !LEAF_BIT) as usize;
-                let Some(refs) = self
-                    .refs
-                    .get(first..)
-                    .and_then(|s| s.get(..it.count as usize))
-                else {
-                    faults += 1;
-                    break;
-                };
-                if q.visit(&self.scene, r, refs) {
-                    break;
+                let run = ((it.child & !LEAF_BIT) as usize, it.count as usize);
+                match q.visit(self, r, run, others) {
+                    Some(false) => continue,
+                    Some(true) => break,
+                    None => {
+                        faults += 1;
+                        break;
+                    }
                 }
-                continue;
             }
             let Some(n) = self.nodes.get(it.child as usize) else {
                 faults += 1;

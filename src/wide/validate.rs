@@ -102,6 +102,10 @@ impl WideBvh<'_> {
         if digest != info.ref_digest() {
             return Err(corrupt("reference digest"));
         }
+        let refs = &self.refs[..info.ref_count as usize];
+        if !super::corners::matches(&self.scene, refs, self.corners) {
+            return Err(corrupt("corners differ from the scene's triangles"));
+        }
         shape.refs = info.ref_count;
         shape.depth = depth;
         Ok(shape)
