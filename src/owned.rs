@@ -344,10 +344,10 @@ impl OwnedWide {
 
     /// Bytes of the nodes in use, the references and their corner blocks.
     pub fn bytes(&self) -> usize {
-        let refs = self.info.ref_count as usize;
-        self.info.node_count as usize * core::mem::size_of::<WideNode>()
-            + refs * 4
-            + wide::corners::blocks_for(refs) * core::mem::size_of::<crate::geom::Corners4>()
+        let i = &self.info;
+        i.node_count as usize * core::mem::size_of::<WideNode>()
+            + i.ref_count as usize * 4
+            + i.corner_blocks as usize * core::mem::size_of::<crate::geom::Corners4>()
     }
 
     /// The parts, to corrupt in tests.

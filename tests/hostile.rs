@@ -721,10 +721,11 @@ fn wide_random_words() {
                             _ => b[k][a][slot] + small as f32 * 0.25,
                         };
                     }
-                    _ => match pick >> 40 & 3 {
+                    _ => match pick >> 40 & 7 {
                         0 => info.depth = value % 64,
                         1 => info.node_count = value % (2 * info.node_count + 2),
                         2 => info.ref_count = value % (2 * info.ref_count + 2),
+                        3 | 4 => info.corner_blocks = value % (2 * info.corner_blocks + 2),
                         _ => info.leaf_count = small,
                     },
                 }

@@ -170,6 +170,35 @@ fn leaf_runs_fill_their_blocks_on_spd_scenes() {
     }
 }
 
+/// Corner blocks cover only the runs that hold a triangle: none for a
+/// scene of spheres and cones, fewer slots than references for a mixed
+/// one, every triangle's for a scene of triangles; each traces as the
+/// kd-tree.
+#[test]
+fn corner_blocks_cover_the_runs_with_triangles() {
+    for (tris, others, seed) in [(0, 300, 41), (300, 300, 42), (600, 0, 43)] {
+        let mut rng = Rng(seed);
+        let o = random_scene(&mut rng, tris, others / 2, others - others / 2, 5.0);
+        let scene = o.scene();
+        let owned = OwnedWide::new(&scene, 4).unwrap();
+        let w = owned.view(scene).unwrap();
+        w.validate().unwrap();
+        let (blocks, n) = (w.info().corner_blocks as usize, scene.prim_count());
+        match (tris, others) {
+            (0, _) => assert_eq!(blocks, 0),
+            (_, 0) => assert_eq!(blocks, n.div_ceil(4)),
+            _ => assert!(
+                blocks * 4 >= tris && blocks * 4 < n,
+                "{blocks} blocks, {n} refs"
+            ),
+        }
+        let kd = OwnedKd::new(&scene, &KdParams::auto()).unwrap();
+        let rays = random_rays(&mut rng, 1000, 5.0);
+        let hits = check(&w, &kd.tree(scene).unwrap(), &rays, "corner blocks");
+        assert!(hits > 100, "{hits} hits");
+    }
+}
+
 /// Rays whose box tests fall exactly on a face: the parallel-axis test
 /// takes a face as inside (1 / 0 = inf would make 0 * inf NaN there).
 #[test]

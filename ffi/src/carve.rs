@@ -81,7 +81,7 @@ const _: () = {
             && align_of::<coray::wide::WideNode>() <= ARENA_ALIGN
     );
     assert!(size_of::<coray::wide::WideStackItem>() == 12);
-    assert!(size_of::<coray::wide::layout::WideArenaHeader>() == 60);
+    assert!(size_of::<coray::wide::layout::WideArenaHeader>() == 68);
 };
 
 /// A byte range `[start, end)` that one call reads or writes (its end

@@ -104,7 +104,7 @@ fn layouts(n: usize) -> Result<(WideArenaLayout, WideScratchLayout), CorayStatus
     }
     let r = wide::requirements(n);
     Ok((
-        WideArenaLayout::of(r.nodes, r.refs).ok_or(too_many)?,
+        WideArenaLayout::for_build(&r).ok_or(too_many)?,
         WideScratchLayout::of(&r).ok_or(too_many)?,
     ))
 }
@@ -200,10 +200,9 @@ pub unsafe extern "C" fn coray_wide_build(
         // its arena (checked above), its parts do not overlap (layout
         // formulas) and the arenas overlap neither each other nor the
         // scene (Regions); the caller lends both exclusively for the call.
-        let (header, nodes, refs, corners, boxes, keys, links, bvh_nodes) = unsafe {
+        let (nodes, refs, corners, boxes, keys, links, bvh_nodes) = unsafe {
             carve::zero(base, arena_l.total_bytes);
             (
-                carve::arena_mut::<WideArenaHeader>(base, 0, 1),
                 carve::arena_mut::<WideNode>(base, arena_l.nodes_offset, arena_l.nodes),
                 carve::arena_mut::<u32>(base, arena_l.refs_offset, arena_l.refs),
                 carve::arena_mut::<Corners4>(base, arena_l.corners_offset, arena_l.corners),
@@ -224,20 +223,28 @@ pub unsafe extern "C" fn coray_wide_build(
             keys,
             links,
         };
-        let w = wide::build(&scene, leaf_size, storage, scratch)?;
-        // The nodes come last: the arena the tree needs is the prefix up
-        // to its last node, and the header records that layout.
-        let info = *w.info();
-        let used = WideArenaLayout::of(info.node_count as usize, arena_l.refs)
-            .ok_or(CorayStatus::TooManyPrimitives)?;
-        header[0] = WideArenaHeader {
-            magic: WIDE_MAGIC,
-            version: WIDE_VERSION,
-            scene_counts: scene_counts(&scene),
-            info,
-            layout_bytes: used.total_bytes as u32,
-            nodes_cap: used.nodes as u32,
-            refs_cap: used.refs as u32,
+        let info = *wide::build(&scene, leaf_size, storage, scratch)?.info();
+        // The nodes moved down to the corner blocks in use: the arena the
+        // tree needs is the prefix up to its last node, and the header
+        // records that layout.
+        // SAFETY: the build's views of the arena are gone (only `info`, a
+        // copy, is left); the layout's bytes are still lent exclusively.
+        let bytes = unsafe { carve::arena_mut::<u8>(base, 0, arena_l.total_bytes) };
+        let used = arena_l
+            .pack(&info, bytes)
+            .ok_or(CorayStatus::InternalError)?;
+        // SAFETY: as above; the header's bytes lie below the first part.
+        unsafe {
+            carve::arena_mut::<WideArenaHeader>(base, 0, 1)[0] = WideArenaHeader {
+                magic: WIDE_MAGIC,
+                version: WIDE_VERSION,
+                scene_counts: scene_counts(&scene),
+                info,
+                layout_bytes: used.total_bytes as u32,
+                nodes_cap: used.nodes as u32,
+                refs_cap: used.refs as u32,
+                corners_cap: used.corners as u32,
+            }
         };
         Ok(())
     })

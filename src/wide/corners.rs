@@ -4,7 +4,9 @@
 //! the scene's indices (Embree keeps its leaf triangles alike). Block `j`
 //! holds the corners of references `4j .. 4j + 4`; a slot that names a
 //! sphere or a cone, or lies past the last reference, holds NaN, which no
-//! ray hits. The copy is the scene's bits at build time: rebuild (or
+//! ray hits. The blocks cover the runs that hold a triangle, which the
+//! build places first (`wide/pack.rs`): a scene of spheres and cones
+//! needs none. The copy is the scene's bits at build time: rebuild (or
 //! [`fill`] again) after moving vertices.
 
 use crate::geom::{Corners4, Scene, TRI_LANES};
@@ -27,13 +29,10 @@ fn lane_corners(scene: &Scene, refs: &[u32], slot: usize) -> [[f32; 3]; 3] {
     }
 }
 
-/// Fills `out[..blocks_for(refs.len())]` from `scene`; false when `out` is
-/// shorter.
+/// Fills every block of `out` from `scene` and `refs` (block `j`: slots
+/// `4j .. 4j + 4`).
 #[allow(clippy::needless_range_loop)] // lanes index the block's innermost arrays
-pub fn fill(scene: &Scene, refs: &[u32], out: &mut [Corners4]) -> bool {
-    let Some(out) = out.get_mut(..blocks_for(refs.len())) else {
-        return false;
-    };
+pub fn fill(scene: &Scene, refs: &[u32], out: &mut [Corners4]) {
     for (j, block) in out.iter_mut().enumerate() {
         for lane in 0..TRI_LANES {
             let c = lane_corners(scene, refs, j * TRI_LANES + lane);
@@ -44,27 +43,20 @@ pub fn fill(scene: &Scene, refs: &[u32], out: &mut [Corners4]) -> bool {
             }
         }
     }
-    true
 }
 
 /// Whether `blocks` hold exactly what [`fill`] writes for `refs` (bit for
 /// bit; NaN lanes any NaN).
 pub fn matches(scene: &Scene, refs: &[u32], blocks: &[Corners4]) -> bool {
-    if blocks.len() < blocks_for(refs.len()) {
-        return false;
-    }
-    blocks[..blocks_for(refs.len())]
-        .iter()
-        .enumerate()
-        .all(|(j, block)| {
-            (0..TRI_LANES).all(|lane| {
-                let c = lane_corners(scene, refs, j * TRI_LANES + lane);
-                (0..3).all(|k| {
-                    (0..3).all(|a| {
-                        let (want, got) = (c[k][a], block[k][a][lane]);
-                        want.to_bits() == got.to_bits() || (want.is_nan() && got.is_nan())
-                    })
+    blocks.iter().enumerate().all(|(j, block)| {
+        (0..TRI_LANES).all(|lane| {
+            let c = lane_corners(scene, refs, j * TRI_LANES + lane);
+            (0..3).all(|k| {
+                (0..3).all(|a| {
+                    let (want, got) = (c[k][a], block[k][a][lane]);
+                    want.to_bits() == got.to_bits() || (want.is_nan() && got.is_nan())
                 })
             })
         })
+    })
 }

@@ -102,6 +102,9 @@ pub struct WideInfo {
     pub leaf_size: u32,
     /// [`crate::rng::ref_digest`] of the references in leaves, low and high words.
     pub ref_digest: [u32; 2],
+    /// Blocks of triangle corners in use ([`corners`]): they cover the
+    /// leaf runs that hold a triangle, which come first.
+    pub corner_blocks: u32,
 }
 
 impl WideInfo {
@@ -176,19 +179,18 @@ pub fn build<'a>(
         (build::collapse(&b, nodes)?, *b.info())
     };
     let refs = &mut refs[..binary.ref_count as usize];
-    if !pack::pack_leaves(&mut nodes[..collapsed.nodes], refs, scratch.links) {
+    let nt = scene.triangles.len();
+    let Some(triangle_slots) =
+        pack::pack_leaves(&mut nodes[..collapsed.nodes], refs, scratch.links, nt)
+    else {
         return Err(Error::Corrupt {
             what: "leaf entries",
         });
-    }
+    };
     let refs = &*refs;
-    if !corners::fill(scene, refs, corners) {
-        return Err(Error::SliceTooSmall {
-            slice: "corners",
-            needed: corners::blocks_for(refs.len()),
-            got: corners.len(),
-        });
-    }
+    // The requirements hold a block for every four primitives.
+    let corners = &mut corners[..corners::blocks_for(triangle_slots)];
+    corners::fill(scene, refs, corners);
     let info = WideInfo {
         node_count: collapsed.nodes as u32,
         leaf_count: collapsed.leaves as u32,
@@ -196,12 +198,13 @@ pub fn build<'a>(
         depth: collapsed.depth,
         leaf_size,
         ref_digest: binary.ref_digest,
+        corner_blocks: corners.len() as u32,
     };
     Ok(WideBvh {
         scene: *scene,
         nodes: &nodes[..collapsed.nodes],
         refs,
-        corners: &corners[..corners::blocks_for(refs.len())],
+        corners,
         info,
     })
 }
@@ -223,7 +226,8 @@ impl<'a> WideBvh<'a> {
         if i.node_count == 0
             || i.node_count as usize > nodes.len()
             || i.ref_count as usize > refs.len()
-            || corners::blocks_for(i.ref_count as usize) > corners.len()
+            || i.corner_blocks as usize > corners.len()
+            || i.corner_blocks as usize > corners::blocks_for(i.ref_count as usize)
             || i.depth >= i.node_count
         {
             return Err(Error::Corrupt { what: "counts" });
@@ -232,7 +236,7 @@ impl<'a> WideBvh<'a> {
             scene,
             nodes: &nodes[..i.node_count as usize],
             refs: &refs[..i.ref_count as usize],
-            corners: &corners[..corners::blocks_for(i.ref_count as usize)],
+            corners: &corners[..i.corner_blocks as usize],
             info,
         })
     }

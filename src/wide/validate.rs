@@ -19,8 +19,10 @@ impl WideBvh<'_> {
     /// breadth-first levels of the recorded depth), that used slots come
     /// first, every slot's box is exactly the union of what it holds (its
     /// child's slots, or its references' primitive boxes), references lie
-    /// in range and name non-degenerate primitives, and the leaves hold
-    /// `ref_count` references with the recorded digest and leaf count.
+    /// in range and name non-degenerate primitives, the leaves hold
+    /// `ref_count` references with the recorded digest and leaf count, the
+    /// corner blocks hold the scene's triangles of the slots they cover,
+    /// and every run with a triangle lies within them.
     ///
     /// Never panics, in time linear in the hierarchy. Once it accepts a
     /// hierarchy, every traversal of it gives the hits of a clean build
@@ -36,6 +38,8 @@ impl WideBvh<'_> {
             ..Shape::default()
         };
         let (mut next, mut refs, mut digest) = (1usize, 0u64, 0u64);
+        // Reference slots the corner blocks cover.
+        let covered = self.corners.len() * crate::geom::TRI_LANES;
         let (mut depth, mut level_end) = (0u32, 1usize);
         for (k, n) in self.nodes[..count].iter().enumerate() {
             if k == level_end {
@@ -65,6 +69,13 @@ impl WideBvh<'_> {
                         .filter(|&end| end <= info.ref_count as usize)
                         .map(|end| &self.refs[first..end])
                         .ok_or(corrupt("references out of range"))?;
+                    if first + m as usize > covered
+                        && run
+                            .iter()
+                            .any(|&p| (p as usize) < self.scene.triangles.len())
+                    {
+                        return Err(corrupt("a run with a triangle past the corner blocks"));
+                    }
                     let mut b = Aabb::EMPTY;
                     for &p in run {
                         digest = digest.wrapping_add(crate::rng::ref_mix(p));
@@ -103,7 +114,9 @@ impl WideBvh<'_> {
             return Err(corrupt("reference digest"));
         }
         let refs = &self.refs[..info.ref_count as usize];
-        if !super::corners::matches(&self.scene, refs, self.corners) {
+        if self.corners.len() != info.corner_blocks as usize
+            || !super::corners::matches(&self.scene, refs, self.corners)
+        {
             return Err(corrupt("corners differ from the scene's triangles"));
         }
         shape.refs = info.ref_count;

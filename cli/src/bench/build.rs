@@ -172,8 +172,7 @@ fn wide(scene: &Scene) -> Result<BuildCell, String> {
     let req = coray::wide::requirements(scene.prim_count());
     let scratch = coray::wide::layout::WideScratchLayout::of(&req).map_or(0, |l| l.total_bytes);
     // The arena's node room bounds the nodes; the build uses fewer.
-    let room =
-        coray::wide::layout::WideArenaLayout::of(req.nodes, req.refs).map_or(0, |l| l.total_bytes);
+    let room = coray::wide::layout::WideArenaLayout::for_build(&req).map_or(0, |l| l.total_bytes);
     Ok(BuildCell {
         builder: "wide".into(),
         ms,
