@@ -157,7 +157,10 @@ pub unsafe extern "C" fn coray_wide_requirements(
 /// primitives stay out (never hit). The part of the arena the layout
 /// covers is written entirely (zeros past the tree); bytes past it are not
 /// touched. The tree ends at `CorayWideInfo.arena_bytes_used` (about a
-/// quarter of the node room is used): only those bytes need be kept.
+/// quarter of the node room is used): only those bytes need be kept. The
+/// arena holds a copy of the triangles' corners, which the leaves test
+/// four at a time: after moving vertices, build again
+/// (`coray_wide_validate` refuses a copy that differs from the scene).
 ///
 /// Safety: every pointer is NULL or valid for its documented size; the
 /// arenas are not read or written by anyone else during the call.
