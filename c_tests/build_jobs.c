@@ -89,10 +89,12 @@ static void run_badly(void *ctx, size_t job_count, size_t flags_bytes, CorayKdRu
     free(flags);
 }
 
-/* Builds with `run_jobs` (NULL: none) and checks the arena against `want`. */
-static void check_build(const CorayScene *scene, CorayKdRunJobs run_jobs, const char *what, const void *want,
-                        size_t bytes, size_t scratch_bytes, int expect_calls) {
+/* Builds with `run_jobs` (NULL: none), jobs made for `job_threads` threads,
+   and checks the arena against `want`; returns the number of jobs. */
+static size_t check_build(const CorayScene *scene, CorayKdRunJobs run_jobs, const char *what, const void *want,
+                          size_t bytes, size_t scratch_bytes, int expect_calls, uint32_t job_threads) {
     CorayKdParams p = coray_kdtree_params_default(CORAY_KD_PRESET_AUTO);
+    p.job_threads = job_threads;
     void *arena = arena_alloc(bytes), *scratch = arena_alloc(scratch_bytes);
     Runner r;
     memset(&r, 0, sizeof r);
@@ -102,7 +104,7 @@ static void check_build(const CorayScene *scene, CorayKdRunJobs run_jobs, const 
     CHECK_STATUS(coray_kdtree_build_jobs(scene, &p, arena, bytes, scratch, scratch_bytes, NULL, run_jobs, &r),
                  CORAY_STATUS_OK);
     if (run_jobs) {
-        CHECK(r.job_count >= 3 && r.job_count <= 32);
+        CHECK(r.job_count >= 2 && r.job_count <= 32);
         CHECK(r.flags_bytes == scene->triangle_count + scene->sphere_count + scene->cone_count);
         CHECK_STATUS(r.worst, CORAY_STATUS_OK);
         CHECK(expect_calls < 0 ? r.calls == (int)r.job_count : r.calls == expect_calls);
@@ -114,6 +116,7 @@ static void check_build(const CorayScene *scene, CorayKdRunJobs run_jobs, const 
     pthread_mutex_destroy(&r.lock);
     free(arena);
     free(scratch);
+    return r.job_count;
 }
 
 int main(void) {
@@ -128,11 +131,16 @@ int main(void) {
     CHECK_STATUS(coray_kdtree_requirements(ts.nt + ts.ns + ts.nc, &p, &req), CORAY_STATUS_OK);
     CHECK_STATUS(coray_kdtree_info(&ref.tree, &info), CORAY_STATUS_OK);
     CHECK(info.truncated == 0);
-    check_build(&ts.view, run_threads, "4 threads", ref.arena, ref.bytes, req.scratch_bytes, -1);
-    check_build(&ts.view, run_reversed, "reversed", ref.arena, ref.bytes, req.scratch_bytes, -1);
-    check_build(&ts.view, run_none, "no job run", ref.arena, ref.bytes, req.scratch_bytes, 0);
-    check_build(&ts.view, run_badly, "misused", ref.arena, ref.bytes, req.scratch_bytes, 1);
-    check_build(&ts.view, NULL, "no runner", ref.arena, ref.bytes, req.scratch_bytes, 0);
+    size_t jobs_default = check_build(&ts.view, run_threads, "4 threads", ref.arena, ref.bytes, req.scratch_bytes, -1, 0);
+    check_build(&ts.view, run_reversed, "reversed", ref.arena, ref.bytes, req.scratch_bytes, -1, 0);
+    check_build(&ts.view, run_none, "no job run", ref.arena, ref.bytes, req.scratch_bytes, 0, 0);
+    check_build(&ts.view, run_badly, "misused", ref.arena, ref.bytes, req.scratch_bytes, 1, 0);
+    check_build(&ts.view, NULL, "no runner", ref.arena, ref.bytes, req.scratch_bytes, 0, 0);
+    /* Jobs made for 2 and for 16 threads: fewer and more of them, the same
+       arena. */
+    size_t jobs_two = check_build(&ts.view, run_threads, "made for 2", ref.arena, ref.bytes, req.scratch_bytes, -1, 2);
+    size_t jobs_many = check_build(&ts.view, run_threads, "made for 16", ref.arena, ref.bytes, req.scratch_bytes, -1, 16);
+    CHECK(jobs_two < jobs_default && jobs_default < jobs_many);
     free(ref.arena);
     scene_free(&ts);
     return finish("build_jobs");

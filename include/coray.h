@@ -14,7 +14,7 @@
 #define CORAY_VERSION_MAJOR 1
 
 // Minor version: new functions or struct fields, compatible.
-#define CORAY_VERSION_MINOR 3
+#define CORAY_VERSION_MINOR 4
 
 // Patch version: fixes only.
 #define CORAY_VERSION_PATCH 0
@@ -356,6 +356,13 @@ typedef struct CorayKdParams {
   // and patch queries that walk ropes return `CORAY_STATUS_NO_ROPES`.
   // 0: ropes. `CORAY_KD_PRESET_AUTO` sets 1, `_PAPER` 0. Since 1.2.
   uint32_t omit_ropes;
+  // Threads that `coray_kdtree_build_jobs`' runner will run the jobs on
+  // (0: not known, the default). The build's top is split until each
+  // job holds about that fraction of the primitives (from a half for 1
+  // or 2 threads to a sixteenth; a quarter when not known), so that two
+  // threads wait less on the top and many find jobs enough. The tree is
+  // the same bytes whatever it says. Since 1.4.
+  uint32_t job_threads;
 } CorayKdParams;
 
 // A kd-tree build preset: `CORAY_KD_PRESET_AUTO` or `CORAY_KD_PRESET_PAPER`.

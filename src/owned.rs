@@ -48,19 +48,21 @@ impl OwnedKd {
 
     /// Builds into this room; the scratch is freed afterwards.
     pub fn build(&mut self, scene: &Scene, params: &KdParams) -> Result<(), Error> {
-        self.build_with_jobs(scene, params, |_| {})
+        self.build_with_jobs(scene, params, 0, |_| {})
     }
 
     /// Builds into this room as [`Self::build`] does, handing the build's
-    /// jobs to `run_jobs` (which may run them on other threads: see
-    /// [`kd::build_begin`]); jobs it leaves run on this thread.
+    /// jobs, made for `threads` threads (0: not known), to `run_jobs`
+    /// (which may run them on other threads: see
+    /// [`kd::build_begin_for_threads`]); jobs it leaves run on this thread.
     pub fn build_with_jobs(
         &mut self,
         scene: &Scene,
         params: &KdParams,
+        threads: usize,
         run_jobs: impl FnOnce(kd::KdJobs<'_>),
     ) -> Result<(), Error> {
-        let mut b = kd::build_begin(
+        let mut b = kd::build_begin_for_threads(
             scene,
             params,
             kd::KdStorage {
@@ -73,6 +75,7 @@ impl OwnedKd {
                 events: &mut self.events,
                 prim_flags: &mut self.flags,
             },
+            threads,
         )?;
         run_jobs(b.jobs());
         self.info = *b.finish()?.info();

@@ -97,7 +97,14 @@ fn by_jobs(
 ) -> (Made, KdJobReport) {
     let mut room = Room::new(req);
     let (storage, scratch) = room.parts();
-    let mut b = kd::build_begin(scene, params, storage, scratch).expect("begin");
+    // Jobs made for the threads that will run them (as many as not known
+    // otherwise).
+    let threads = match run {
+        Run::Threads(t) => t,
+        _ => 0,
+    };
+    let mut b =
+        kd::build_begin_for_threads(scene, params, storage, scratch, threads).expect("begin");
     let jobs = b.job_count();
     let n = scene.prim_count();
     match run {
@@ -141,9 +148,14 @@ fn check_equal(scene: &Scene, params: &KdParams, what: &str) -> (bool, Made) {
     let reference = depth_first(scene, params, &req);
     let truncated = reference.info.flags & KD_FLAG_TRUNCATED != 0;
     let mut first: Option<Made> = None;
-    for run in [Run::ByFinish, Run::Reversed, Run::Threads(3)] {
+    for run in [
+        Run::ByFinish,
+        Run::Reversed,
+        Run::Threads(3),
+        Run::Threads(2),
+    ] {
         let (m, report) = by_jobs(scene, params, &req, run);
-        assert!(report.jobs >= 3, "{what}: {report:?}");
+        assert!(report.jobs >= 2, "{what}: {report:?}");
         if truncated {
             // The depth-first build spends the room on the subtrees it
             // reaches first; when every job fits its share, the job build
@@ -233,6 +245,30 @@ fn job_build_equals_depth_first_on_random_scenes() {
         let o = random_scene(&mut rng, tris, spheres, cones, 10.0);
         assert!(!check_equal(&o.scene(), &KdParams::auto(), &format!("random {tris}")).0);
     }
+}
+
+/// Jobs made for two threads are fewer than those made for an unknown
+/// number, and those for sixteen more; the tree is the same.
+#[test]
+fn the_thread_count_sets_the_number_of_jobs_not_the_tree() {
+    let mut rng = Rng(11);
+    let o = random_scene(&mut rng, 4000, 300, 100, 10.0);
+    let (scene, params) = (o.scene(), KdParams::auto());
+    let req = kd::requirements(scene.prim_count(), &params);
+    let reference = depth_first(&scene, &params, &req);
+    let mut counts = Vec::new();
+    for threads in [2, 0, 16] {
+        let mut room = Room::new(&req);
+        let (storage, scratch) = room.parts();
+        let b = kd::build_begin_for_threads(&scene, &params, storage, scratch, threads).unwrap();
+        counts.push(b.job_count());
+        let tree = b.finish().unwrap();
+        assert!(
+            made(&tree) == reference,
+            "{threads} threads: the tree differs"
+        );
+    }
+    assert!(counts[0] < counts[1] && counts[1] < counts[2], "{counts:?}");
 }
 
 /// With the least room every job runs out of its share; `finish` then

@@ -84,7 +84,7 @@ impl<'s> Built<'s> {
                 let mut o =
                     OwnedKd::with_room(&coray::kd::requirements(scene.prim_count(), &params));
                 let t = Instant::now();
-                o.build_with_jobs(&scene, &params, |jobs| {
+                o.build_with_jobs(&scene, &params, threads, |jobs| {
                     crate::kd_jobs::run(jobs, threads, scene.prim_count())
                 })
                 .map_err(err)?;

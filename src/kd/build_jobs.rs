@@ -39,10 +39,19 @@ use crate::Error;
 pub const KD_MAX_JOBS: usize = 32;
 
 /// A node becomes a job once it has at most this fraction of the scene's
-/// primitives (plus [`JOB_SLACK`]): a few top levels, so the part of the
-/// build that runs on one thread stays small, and jobs enough to balance
-/// two to eight threads.
+/// primitives (plus [`JOB_SLACK`]) when the build is not told how many
+/// threads will run its jobs: a few top levels, so the part of the build
+/// that runs on one thread stays small, and jobs enough to balance two to
+/// eight threads. Told `t` threads, the fraction is `t` (2 to
+/// [`MAX_JOB_FRACTION`]): two threads then wait on one top split, not
+/// three (`coray bench --table build --threads 2`: SPD mount's two-thread
+/// build 3.7 -> 3.5 ms, balls 9.1 -> 8.7, tree 10.2 -> 9.8), and many find
+/// jobs enough.
 const JOB_FRACTION: usize = 4;
+
+/// The largest fraction a thread count sets (its jobs, with the slack's
+/// stragglers, stay within [`KD_MAX_JOBS`]).
+const MAX_JOB_FRACTION: usize = 16;
 
 /// The slack on [`JOB_FRACTION`], as a fraction of the primitives, for
 /// those that straddle the top splits (SPD rings' third level has 2124 of
@@ -125,17 +134,37 @@ pub struct KdBuild<'s, 'a> {
 /// Starts a kd build over `scene` in `storage`, with `scratch`: checks the
 /// input as [`super::build`] does, then builds the top of the tree on the
 /// calling thread. Run the jobs with [`KdBuild::jobs`] on any threads, then
-/// [`KdBuild::finish`].
+/// [`KdBuild::finish`]. [`build_begin_for_threads`] when the number of
+/// threads is known.
 pub fn build_begin<'s, 'a>(
     scene: &Scene<'a>,
     params: &KdParams,
     storage: KdStorage<'a>,
     scratch: KdScratch<'s>,
 ) -> Result<KdBuild<'s, 'a>, Error> {
+    build_begin_for_threads(scene, params, storage, scratch, 0)
+}
+
+/// [`build_begin`] for jobs that `threads` threads will run (0: not
+/// known): the top is split until each job holds about a `threads`-th of
+/// the primitives (a half at most, a sixteenth at least; a quarter when not
+/// known), so that few threads wait less on the top's splits and many
+/// find jobs enough. The tree does not depend on it.
+pub fn build_begin_for_threads<'s, 'a>(
+    scene: &Scene<'a>,
+    params: &KdParams,
+    storage: KdStorage<'a>,
+    scratch: KdScratch<'s>,
+    threads: usize,
+) -> Result<KdBuild<'s, 'a>, Error> {
     check_build(scene, params, &storage, &scratch)?;
     let mut b = Builder::new(*scene, params, storage, scratch.events, scratch.prim_flags);
     let root = b.root_task();
-    let job_prims = (root.prims / JOB_FRACTION + root.prims / JOB_SLACK).max(MIN_JOB_PRIMS);
+    let fraction = match threads {
+        0 => JOB_FRACTION,
+        t => t.clamp(2, MAX_JOB_FRACTION),
+    };
+    let job_prims = (root.prims / fraction + root.prims / JOB_SLACK).max(MIN_JOB_PRIMS);
     let mut specs = [JobSpec {
         task: root,
         events: Share::default(),

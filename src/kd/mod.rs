@@ -19,7 +19,9 @@ pub(crate) mod traverse;
 mod validate;
 
 pub use build::{build, build_depth_first, KdEvent};
-pub use build_jobs::{build_begin, KdBuild, KdJob, KdJobReport, KdJobs, KD_MAX_JOBS};
+pub use build_jobs::{
+    build_begin, build_begin_for_threads, KdBuild, KdJob, KdJobReport, KdJobs, KD_MAX_JOBS,
+};
 pub use node::{
     KdInfo, KdNode, KdRopes, KdStackItem, KD_FLAG_ROPES, KD_FLAG_TRUNCATED, KD_MAGIC, KD_MAX_DEPTH,
     KD_STACK_LEN, KD_VERSION, NO_NODE,

@@ -123,7 +123,7 @@ fn kd(scene: &Scene, preset: Preset, name: &str, threads: usize) -> Result<Build
     let req = coray::kd::requirements(scene.prim_count(), &params);
     let mut o = OwnedKd::with_room(&req);
     let t = Instant::now();
-    o.build_with_jobs(scene, &params, |jobs| {
+    o.build_with_jobs(scene, &params, threads, |jobs| {
         crate::kd_jobs::run(jobs, threads, scene.prim_count())
     })
     .map_err(|e| format!("{name}: {e}"))?;
