@@ -6,11 +6,14 @@
 //! dependent one-plane steps costs most: the same primitive tests and tie
 //! rule give the kd-tree's hits bit for bit.
 //!
-//! Built in two steps in the caller's memory: the binary SAH hierarchy
+//! Built in three steps in the caller's memory: the binary SAH hierarchy
 //! ([`crate::bvh::Builder::TdbsSah`]'s sweep; small nodes become leaves
-//! where the SAH prices a leaf no higher than a split) into scratch, then
+//! where the SAH prices a leaf no higher than a split) into scratch,
 //! collapsed ([`build`]) into breadth-first wide nodes over the same
-//! references.
+//! references, whose leaf runs are then placed (those holding a triangle
+//! first, each filling the block of four slots the one before left) and
+//! their triangles' corners copied into blocks ([`corners`]) that a leaf
+//! tests four triangles at a time from.
 //! The caller owns the traversal stack ([`WideBvh::stack_len`]).
 
 mod build;

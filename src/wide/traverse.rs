@@ -1,7 +1,8 @@
 //! Closest-hit and any-hit traversal: one slab test of a node's four boxes
 //! at once, entries hit pushed nearest last (closest hit) so the nearest
-//! is visited first, each leaf's primitives tested with the kd-tree's
-//! tests and tie rule, so the hits are the kd-tree's bit for bit.
+//! is visited first, each leaf's triangles tested four at a time from its
+//! corner blocks and its spheres and cones one at a time, with the
+//! kd-tree's tests and tie rule, so the hits are the kd-tree's bit for bit.
 //!
 //! The box test is chosen once per ray: rays with no zero direction
 //! component take the plain slab test; the others take one that decides
