@@ -4,8 +4,8 @@
 //! add, multiply, compare 1, divide 5, square root 15).
 
 use super::{Bvh, BvhNode};
+use crate::geom::leaf::beats;
 use crate::geom::{Hit, PreparedRay, Ray, GEOM_SPHERES, GEOM_TRIANGLES};
-use crate::kd::traverse::tie_wins;
 use crate::TraceStats;
 
 /// Thesis 4.1.2: a slab costs 15 per axis (2 when the ray is parallel to
@@ -276,7 +276,7 @@ impl<'a> Bvh<'a> {
                         continue;
                     }
                     if let Some(h) = self.test_prim(p, r, limit(&best), st) {
-                        if !best.is_hit() || h.t < best.t || tie_wins(&h, &best) {
+                        if beats(&h, &best) {
                             best = h;
                         }
                     }

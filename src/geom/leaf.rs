@@ -14,16 +14,35 @@ use super::{Hit, PreparedRay, Scene, GEOM_TRIANGLES};
 /// (triangles, then spheres, then cones), so every traversal order, and so
 /// every structure, reports the same primitive.
 #[inline]
-pub(crate) fn tie_wins(h: &Hit, best: &Hit) -> bool {
+fn tie_wins(h: &Hit, best: &Hit) -> bool {
     h.t == best.t && (h.geom_id, h.prim_id) < (best.geom_id, best.prim_id)
 }
 
-/// Keeps `h` in `best` when it is nearer, or ties and wins.
+/// Whether hit `h` replaces `best` (a miss, or the best hit so far): it is
+/// nearer, or ties and wins. Every closest-hit query keeps hits by it.
+#[inline(always)]
+pub(crate) fn beats(h: &Hit, best: &Hit) -> bool {
+    !best.is_hit() || h.t < best.t || tie_wins(h, best)
+}
+
+/// Keeps `h` in `best` when it [`beats`] it.
 #[inline(always)]
 fn keep(best: &mut Hit, h: Hit) {
-    if !best.is_hit() || h.t < best.t || tie_wins(&h, best) {
+    if beats(&h, best) {
         *best = h;
     }
+}
+
+/// The lanes set in `mask`, lowest first.
+#[inline(always)]
+fn lanes_of(mut mask: u32) -> impl Iterator<Item = usize> {
+    core::iter::from_fn(move || {
+        (mask != 0).then(|| {
+            let lane = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            lane
+        })
+    })
 }
 
 /// Triangle `lane` of `block` hit as `h4` found it, reported as
@@ -64,6 +83,32 @@ fn block_runs(first: usize, count: usize) -> impl Iterator<Item = (usize, u32)> 
     })
 }
 
+/// The blocks of [`block_runs`] that hold a triangle among the run's
+/// lanes, as (block index, block, those lanes); `None` for a block past
+/// `blocks` (corrupt input).
+#[inline(always)]
+fn triangle_blocks(
+    blocks: &[Corners4],
+    first: usize,
+    count: usize,
+) -> impl Iterator<Item = Option<(usize, &Corners4, u32)>> {
+    block_runs(first, count).filter_map(move |(b, lanes)| match blocks.get(b) {
+        None => Some(None),
+        Some(block) => {
+            let lanes = lanes & triangle_lanes(block);
+            (lanes != 0).then_some(Some((b, block, lanes)))
+        }
+    })
+}
+
+/// References `refs[first..first + count]`, or `None` past `refs`.
+#[inline(always)]
+fn run_of(refs: &[u32], first: usize, count: usize) -> Option<&[u32]> {
+    first
+        .checked_add(count)
+        .and_then(|end| refs.get(first..end))
+}
+
 /// The closest hit among the references `refs[first..first + count]`
 /// nearer than `best` (a miss, or a hit from an earlier leaf) within
 /// `[r.t_min, r.t_max]`, kept in `best`. Their triangles' corners lie in
@@ -82,49 +127,37 @@ pub(crate) fn closest_in_blocks(
     others: bool,
     best: &mut Hit,
 ) -> bool {
-    let Some(run) = first
-        .checked_add(count)
-        .and_then(|end| refs.get(first..end))
-    else {
+    let Some(run) = run_of(refs, first, count) else {
         return false;
     };
+    let limit = |best: &Hit| if best.is_hit() { best.t } else { r.t_max };
     let mut triangles = !others;
     if others {
         let nt = scene.triangles.len();
         for &p in run {
             if (p as usize) < nt {
                 triangles = true;
-            } else {
-                let t_max = if best.is_hit() { best.t } else { r.t_max };
-                if let Some(h) = scene.intersect_prim(p as usize, r, t_max) {
-                    keep(best, h);
-                }
+            } else if let Some(h) = scene.intersect_prim(p as usize, r, limit(best)) {
+                keep(best, h);
             }
         }
     }
     if !triangles {
         return true;
     }
-    for (b, lanes) in block_runs(first, count) {
-        let Some(block) = blocks.get(b) else {
+    for found in triangle_blocks(blocks, first, count) {
+        let Some((b, block, lanes)) = found else {
             return false;
         };
-        let lanes = lanes & triangle_lanes(block);
-        if lanes == 0 {
-            continue;
-        }
-        let t_max = if best.is_hit() { best.t } else { r.t_max };
+        let t_max = limit(best);
         let h4 = intersect_triangles4(r, block, t_max);
-        let (mut hit, mut edge) = (h4.hit & lanes, h4.edge & lanes);
-        while hit != 0 {
-            let lane = hit.trailing_zeros() as usize;
-            hit &= hit - 1;
-            let prim = refs[b * TRI_LANES + lane];
-            keep(best, block_hit(block, &h4, lane, prim));
+        for lane in lanes_of(h4.hit & lanes) {
+            keep(
+                best,
+                block_hit(block, &h4, lane, refs[b * TRI_LANES + lane]),
+            );
         }
-        while edge != 0 {
-            let lane = edge.trailing_zeros() as usize;
-            edge &= edge - 1;
+        for lane in lanes_of(h4.edge & lanes) {
             let prim = refs[b * TRI_LANES + lane] as usize;
             if let Some(h) = scene.intersect_prim(prim, r, t_max) {
                 keep(best, h);
@@ -147,9 +180,7 @@ pub(crate) fn any_in_blocks(
     others: bool,
     t_max: f32,
 ) -> Option<bool> {
-    let run = first
-        .checked_add(count)
-        .and_then(|end| refs.get(first..end))?;
+    let run = run_of(refs, first, count)?;
     let mut triangles = !others;
     if others {
         let nt = scene.triangles.len();
@@ -164,24 +195,15 @@ pub(crate) fn any_in_blocks(
     if !triangles {
         return Some(false);
     }
-    for (b, lanes) in block_runs(first, count) {
-        let block = blocks.get(b)?;
-        let lanes = lanes & triangle_lanes(block);
-        if lanes == 0 {
-            continue;
-        }
+    for found in triangle_blocks(blocks, first, count) {
+        let (b, block, lanes) = found?;
         let h4 = intersect_triangles4(r, block, t_max);
-        if h4.hit & lanes != 0 {
-            return Some(true);
-        }
-        let mut edge = h4.edge & lanes;
-        while edge != 0 {
-            let lane = edge.trailing_zeros() as usize;
-            edge &= edge - 1;
+        let edge_hit = |lane: usize| {
             let prim = refs[b * TRI_LANES + lane] as usize;
-            if scene.intersect_prim(prim, r, t_max).is_some() {
-                return Some(true);
-            }
+            scene.intersect_prim(prim, r, t_max).is_some()
+        };
+        if h4.hit & lanes != 0 || lanes_of(h4.edge & lanes).any(edge_hit) {
+            return Some(true);
         }
     }
     Some(false)

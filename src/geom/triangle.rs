@@ -109,10 +109,11 @@ pub fn intersect_triangles4(r: &PreparedRay, c: &Corners4, t_max: f32) -> Hits4 
         w[i] = bx * ay - by * ax;
     }
     let (mut t, mut u_out, mut v_out) = ([0.0f32; L], [0.0f32; L], [0.0f32; L]);
+    let mut det = [0.0f32; L];
     for i in 0..L {
-        let det = u[i] + v[i] + w[i];
+        det[i] = u[i] + v[i] + w[i];
         let t_scaled = u[i] * z[0][i] + v[i] * z[1][i] + w[i] * z[2][i];
-        let inv_det = 1.0 / det;
+        let inv_det = 1.0 / det[i];
         t[i] = t_scaled * inv_det;
         u_out[i] = v[i] * inv_det;
         v_out[i] = w[i] * inv_det;
@@ -123,10 +124,11 @@ pub fn intersect_triangles4(r: &PreparedRay, c: &Corners4, t_max: f32) -> Hits4 
         let on_edge = mask(u[i] == 0.0) | mask(v[i] == 0.0) | mask(w[i] == 0.0);
         let neg = mask(u[i] < 0.0) | mask(v[i] < 0.0) | mask(w[i] < 0.0);
         let pos = mask(u[i] > 0.0) | mask(v[i] > 0.0) | mask(w[i] > 0.0);
-        let det = u[i] + v[i] + w[i];
         // As the one-triangle test: no zero or NaN determinant.
-        let valid =
-            mask(det != 0.0) & mask(!det.is_nan()) & mask(t[i] >= r.t_min) & mask(t[i] <= t_max);
+        let valid = mask(det[i] != 0.0)
+            & mask(!det[i].is_nan())
+            & mask(t[i] >= r.t_min)
+            & mask(t[i] <= t_max);
         hit_lanes[i] = !on_edge & !(neg & pos) & valid;
         edge_lanes[i] = on_edge;
     }
@@ -219,6 +221,18 @@ mod tests {
     use super::*;
     use crate::rng::SplitMix64;
 
+    /// A coordinate in [-2, 2], on the half-unit grid one time in
+    /// `one_in`: so that vertices land on faces and rays pass through edges
+    /// and corners.
+    fn grid_coord(rng: &mut SplitMix64, one_in: u64) -> f32 {
+        let x = rng.next_f32() * 4.0 - 2.0;
+        if rng.below(one_in) == 0 {
+            libm::roundf(x * 2.0) / 2.0
+        } else {
+            x
+        }
+    }
+
     /// Sutherland-Hodgman against all six planes, no shortcut: the
     /// reference the clipping must equal bit for bit.
     fn clip_every_plane(v: [Vec3; 3], voxel: &Aabb) -> Option<Aabb> {
@@ -269,16 +283,9 @@ mod tests {
     #[test]
     fn clipping_equals_clipping_by_every_plane() {
         let mut rng = SplitMix64(77);
-        let coord = |rng: &mut SplitMix64| {
-            // Coordinates on a coarse grid now and then, so that vertices
-            // land exactly on the box's faces.
-            let x = rng.next_f32() * 4.0 - 2.0;
-            if rng.below(4) == 0 {
-                libm::roundf(x * 2.0) / 2.0
-            } else {
-                x
-            }
-        };
+        // Coordinates on a coarse grid now and then, so that vertices land
+        // exactly on the box's faces.
+        let coord = |rng: &mut SplitMix64| grid_coord(rng, 4);
         let (mut clipped, mut whole, mut none) = (0, 0, 0);
         for _ in 0..20_000 {
             let mut p = || Vec3::new(coord(&mut rng), coord(&mut rng), coord(&mut rng));
@@ -332,14 +339,7 @@ mod tests {
     fn four_lanes_answer_as_one_triangle_tests() {
         use crate::geom::Ray;
         let mut rng = SplitMix64(404);
-        let coord = |rng: &mut SplitMix64| {
-            let x = rng.next_f32() * 4.0 - 2.0;
-            if rng.below(3) == 0 {
-                libm::roundf(x * 2.0) / 2.0
-            } else {
-                x
-            }
-        };
+        let coord = |rng: &mut SplitMix64| grid_coord(rng, 3);
         let (mut hits, mut edges, mut misses) = (0, 0, 0);
         for _ in 0..20_000 {
             let mut c: Corners4 = [[[0.0; TRI_LANES]; 3]; 3];

@@ -27,9 +27,10 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::node::{KdRopes, KdStackItem, KD_STACK_LEN};
-use super::traverse::{inside_leaf, tie_wins, Steps};
+use super::traverse::{inside_leaf, Steps};
 use super::KdTree;
 use crate::geom::lanes::{F8, M8};
+use crate::geom::leaf::beats;
 use crate::geom::{intersect_triangle, Aabb, Hit, PreparedRay, Ray, Vec3, GEOM_TRIANGLES};
 use crate::limits::KD_MAX_DEPTH;
 use crate::TraceStats;
@@ -272,7 +273,7 @@ impl ClosestLanes {
     #[inline(always)]
     fn offer(&mut self, i: usize, h: Hit) {
         let b = &self.best[i];
-        if !b.is_hit() || h.t < b.t || tie_wins(&h, b) {
+        if beats(&h, b) {
             self.best[i] = h;
             self.t_max.0[i] = h.t;
             self.found.0[i] = u32::MAX;

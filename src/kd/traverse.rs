@@ -5,6 +5,7 @@
 
 use super::node::{KdNode, KdStackItem, KD_STACK_LEN, NO_NODE};
 use super::KdTree;
+use crate::geom::leaf::beats;
 use crate::geom::{Hit, PreparedRay, Ray, Scene, Vec3};
 use crate::limits::KD_MAX_DEPTH;
 use crate::TraceStats;
@@ -66,7 +67,7 @@ impl LeafVisitor for Closest {
                 self.ray.t_max
             };
             if let Some(h) = scene.intersect_prim(p as usize, &self.ray, t_max) {
-                if !self.best.is_hit() || h.t < self.best.t || tie_wins(&h, &self.best) {
+                if beats(&h, &self.best) {
                     self.best = h;
                 }
             }
@@ -76,8 +77,6 @@ impl LeafVisitor for Closest {
         self.best.is_hit() && inside_leaf(self.best.t, exit_t)
     }
 }
-
-pub(crate) use crate::geom::leaf::tie_wins;
 
 /// Whether a hit at `t` lies clearly before a leaf's exit at `exit_t`, by
 /// more than the rounding of either ([`crate::tolerance::LEAF_EXIT_MARGIN`]
