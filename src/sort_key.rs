@@ -28,27 +28,26 @@ pub(crate) fn from_ordered_bits(bits: u32) -> f32 {
 
 /// Sorts `items` by `key`, stably (items with equal keys keep their
 /// order): a least-significant-digit radix sort, one byte a pass, that
-/// skips the bytes every key shares. `spare` holds at least as many items.
-/// O(n) per pass, against the O(n log n) comparisons (each loading two
-/// keys) of a comparison sort.
+/// skips the bytes every key shares. `spare` holds at least as many items
+/// (fewer than 2^32). O(n) per pass, against the O(n log n) comparisons
+/// (each loading two keys) of a comparison sort; one counting pass fills
+/// the four bytes' histograms (4 KiB of stack), so each key is read five
+/// times, not eight.
 pub(crate) fn radix_sort_by_key(items: &mut [u32], spare: &mut [u32], key: impl Fn(u32) -> u32) {
     let n = items.len();
     let spare = &mut spare[..n];
+    let mut starts = [[0u32; 256]; 4];
+    for &x in items.iter() {
+        let k = key(x);
+        for (byte, count) in starts.iter_mut().enumerate() {
+            count[(k >> (8 * byte)) as usize & 0xff] += 1;
+        }
+    }
     // Passes alternate between the two slices; `in_spare` says where the
     // items are now.
     let mut in_spare = false;
-    for shift in [0u32, 8, 16, 24] {
-        let (from, to) = if in_spare {
-            (&mut *spare, &mut *items)
-        } else {
-            (&mut *items, &mut *spare)
-        };
-        let digit = |x: u32| (key(x) >> shift) as usize & 0xff;
-        let mut start = [0usize; 256];
-        for &x in from.iter() {
-            start[digit(x)] += 1;
-        }
-        if start.contains(&n) {
+    for (byte, start) in starts.iter_mut().enumerate() {
+        if start.contains(&(n as u32)) {
             continue;
         }
         let mut sum = 0;
@@ -57,9 +56,15 @@ pub(crate) fn radix_sort_by_key(items: &mut [u32], spare: &mut [u32], key: impl 
             *s = sum;
             sum += c;
         }
+        let (from, to) = if in_spare {
+            (&mut *spare, &mut *items)
+        } else {
+            (&mut *items, &mut *spare)
+        };
+        let shift = 8 * byte as u32;
         for &x in from.iter() {
-            let d = digit(x);
-            to[start[d]] = x;
+            let d = (key(x) >> shift) as usize & 0xff;
+            to[start[d] as usize] = x;
             start[d] += 1;
         }
         in_spare = !in_spare;
