@@ -11,6 +11,7 @@ use super::{binary, check_storage, gather, requirements, Builder, Bvh, BvhNode};
 use super::{BvhScratch, BvhStorage};
 use crate::geom::{Aabb, Scene};
 use crate::Error;
+use glam::Vec3A;
 
 fn centre(b: &Aabb, axis: usize) -> f32 {
     0.5 * (b.min[axis] + b.max[axis])
@@ -26,6 +27,41 @@ fn half_area(b: &Aabb) -> f64 {
     debug_assert!(!b.is_empty());
     let e = (b.max - b.min).as_dvec3();
     e.x * e.y + e.y * e.z + e.z * e.x
+}
+
+/// A box that a sweep grows one primitive box at a time, in SIMD lanes
+/// (glam's `Vec3A`: one `minps` and one `maxps` a join).
+#[derive(Clone, Copy)]
+struct Grown {
+    min: Vec3A,
+    max: Vec3A,
+}
+
+impl Grown {
+    const EMPTY: Grown = Grown {
+        min: Vec3A::INFINITY,
+        max: Vec3A::NEG_INFINITY,
+    };
+
+    #[inline(always)]
+    fn join(&mut self, b: &Aabb) {
+        self.min = self.min.min(Vec3A::from(b.min));
+        self.max = self.max.max(Vec3A::from(b.max));
+    }
+
+    /// [`half_area`] of the box, to the bit.
+    #[inline(always)]
+    fn half_area(&self) -> f64 {
+        let e = (self.max - self.min).as_dvec3();
+        e.x * e.y + e.y * e.z + e.z * e.x
+    }
+
+    fn aabb(&self) -> Aabb {
+        Aabb {
+            min: self.min.into(),
+            max: self.max.into(),
+        }
+    }
 }
 
 /// The box centre on `axis` as a `u32` that orders as `f32::total_cmp`
@@ -87,11 +123,9 @@ pub(crate) fn build<'a>(
     let suffix = &mut scratch.keys[..];
     let n = gather(scene, source, boxes, refs)?;
     let boxes = &*boxes;
-    let mut root_box = Aabb::EMPTY;
-    for &p in &refs[..n] {
-        root_box = root_box.union(&boxes[p as usize]);
-    }
-    nodes[0] = BvhNode::leaf(&root_box, 0, n as u32);
+    // Every node's box is written when its turn comes: a node that is
+    // split gets it from its sweeps, which join its boxes anyway.
+    nodes[0] = BvhNode::leaf(&Aabb::EMPTY, 0, n as u32);
     // Depth per pair of siblings (root: pair 0; nodes 2p - 1 and 2p: pair
     // p), then the references sorted by centre on each axis, once: a
     // node's run in each order is its part of the parent's, partitioned
@@ -128,14 +162,19 @@ pub(crate) fn build<'a>(
         let d = level.get(pair(i)).copied().unwrap_or(0);
         let small = count <= leaf_size as usize;
         if small && (count < 2 || rule == LeafRule::Size) {
+            let b = refs[first..first + count]
+                .iter()
+                .fold(Aabb::EMPTY, |b, &p| b.union(&boxes[p as usize]));
+            nodes[i] = BvhNode::leaf(&b, first as u32, count as u32);
             depth = depth.max(d);
             i += 1;
             continue;
         }
         // (criterion, axis, left count): smaller criterion is better.
         let mut best: Option<(f64, usize, usize)> = None;
+        let mut bounds = Aabb::EMPTY;
         for (axis, o) in order.iter().enumerate() {
-            sweep(
+            bounds = sweep(
                 &o[first..first + count],
                 boxes,
                 suffix,
@@ -148,8 +187,9 @@ pub(crate) fn build<'a>(
         if let (true, LeafRule::Sah { traversal }) = (small, rule) {
             // The sweep's criterion is A_L n_L + A_R n_R: the split's
             // tests in units of the node's area times one test.
-            let a = half_area(&nd.bounds());
+            let a = half_area(&bounds);
             if c + traversal * a >= a * count as f64 {
+                nodes[i] = BvhNode::leaf(&bounds, first as u32, count as u32);
                 depth = depth.max(d);
                 i += 1;
                 continue;
@@ -160,13 +200,6 @@ pub(crate) fn build<'a>(
         // keeps if it stays a leaf.
         refs[first..first + count].copy_from_slice(run);
         let pivot = centre_key(centres[axis], run[k]);
-        let (mut bl, mut br) = (Aabb::EMPTY, Aabb::EMPTY);
-        for &p in &run[..k] {
-            bl = bl.union(&boxes[p as usize]);
-        }
-        for &p in &run[k..] {
-            br = br.union(&boxes[p as usize]);
-        }
         for (b, o) in order.iter_mut().enumerate() {
             if b != axis {
                 partition(&mut o[first..first + count], right_side, |p| {
@@ -174,9 +207,9 @@ pub(crate) fn build<'a>(
                 });
             }
         }
-        nodes[top] = BvhNode::leaf(&bl, first as u32, k as u32);
-        nodes[top + 1] = BvhNode::leaf(&br, (first + k) as u32, (count - k) as u32);
-        nodes[i] = BvhNode::interior(&nd.bounds(), top as u32, 2);
+        nodes[top] = BvhNode::leaf(&Aabb::EMPTY, first as u32, k as u32);
+        nodes[top + 1] = BvhNode::leaf(&Aabb::EMPTY, (first + k) as u32, (count - k) as u32);
+        nodes[i] = BvhNode::interior(&bounds, top as u32, 2);
         level[pair(top)] = d + 1;
         top += 2;
         i += 1;
@@ -196,9 +229,9 @@ fn sweep(
     builder: Builder,
     axis: usize,
     best: &mut Option<(f64, usize, usize)>,
-) {
+) -> Aabb {
     let suffix = &mut suffix[..run.len()];
-    suffix_areas(run, boxes, suffix);
+    let right = suffix_areas(run, boxes, suffix);
     let found = match builder {
         Builder::Tdbs => sweep_balanced(run, boxes, suffix, best.map(|b| b.0)),
         _ => sweep_sah(run, boxes, suffix, best.map(|b| b.0)),
@@ -206,16 +239,19 @@ fn sweep(
     if let Some((c, k)) = found {
         *best = Some((c, axis, k));
     }
+    right.union(&boxes[run[0] as usize])
 }
 
-/// `suffix[k]` = the half area of `run[k..]`'s boxes, for `k` in `1..`.
-fn suffix_areas(run: &[u32], boxes: &[Aabb], suffix: &mut [f32]) {
-    let mut acc = Aabb::EMPTY;
+/// `suffix[k]` = the half area of `run[k..]`'s boxes, for `k` in `1..`;
+/// returns the box of `run[1..]`.
+fn suffix_areas(run: &[u32], boxes: &[Aabb], suffix: &mut [f32]) -> Aabb {
+    let mut acc = Grown::EMPTY;
     let n = run.len().min(suffix.len());
     for (&p, s) in run[1..n].iter().zip(&mut suffix[1..n]).rev() {
-        acc = acc.union(&boxes[p as usize]);
-        *s = half_area(&acc) as f32;
+        acc.join(&boxes[p as usize]);
+        *s = acc.half_area() as f32;
     }
+    acc.aabb()
 }
 
 /// The partition whose criterion is smaller than `to_beat` (any, the
