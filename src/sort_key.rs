@@ -30,31 +30,36 @@ pub(crate) fn from_ordered_bits(bits: u32) -> f32 {
 /// order): a least-significant-digit radix sort, one byte a pass, that
 /// skips the bytes every key shares. `spare` holds at least as many items
 /// (fewer than 2^32). O(n) per pass, against the O(n log n) comparisons
-/// (each loading two keys) of a comparison sort; one counting pass fills
-/// the four bytes' histograms (4 KiB of stack), so each key is read five
-/// times, not eight.
+/// (each loading two keys) of a comparison sort. One counting pass fills
+/// every byte's histogram (5 KiB of stack with the cursors), so each key
+/// is read five times, not eight. Each pass moves the front half forwards
+/// from each bucket's start and the back half backwards from its end, side
+/// by side: two chains of cursor updates overlap, where one would wait on
+/// itself whenever neighbouring keys share a byte.
 pub(crate) fn radix_sort_by_key(items: &mut [u32], spare: &mut [u32], key: impl Fn(u32) -> u32) {
     let n = items.len();
     let spare = &mut spare[..n];
-    let mut starts = [[0u32; 256]; 4];
+    let mut counts = [[0u32; 256]; 4];
     for &x in items.iter() {
         let k = key(x);
-        for (byte, count) in starts.iter_mut().enumerate() {
+        for (byte, count) in counts.iter_mut().enumerate() {
             count[(k >> (8 * byte)) as usize & 0xff] += 1;
         }
     }
     // Passes alternate between the two slices; `in_spare` says where the
     // items are now.
     let mut in_spare = false;
-    for (byte, start) in starts.iter_mut().enumerate() {
+    for (byte, start) in counts.iter_mut().enumerate() {
         if start.contains(&(n as u32)) {
             continue;
         }
+        let mut end = [0u32; 256];
         let mut sum = 0;
-        for s in start.iter_mut() {
+        for (s, e) in start.iter_mut().zip(end.iter_mut()) {
             let c = *s;
             *s = sum;
             sum += c;
+            *e = sum;
         }
         let (from, to) = if in_spare {
             (&mut *spare, &mut *items)
@@ -62,10 +67,21 @@ pub(crate) fn radix_sort_by_key(items: &mut [u32], spare: &mut [u32], key: impl 
             (&mut *items, &mut *spare)
         };
         let shift = 8 * byte as u32;
-        for &x in from.iter() {
-            let d = (key(x) >> shift) as usize & 0xff;
-            to[start[d] as usize] = x;
-            start[d] += 1;
+        let digit = |x: u32| (key(x) >> shift) as usize & 0xff;
+        // The back half has the odd item, moved last (it is its first).
+        let (front, back) = from.split_at(n / 2);
+        for (&a, &b) in front.iter().zip(back.iter().rev()) {
+            let (da, db) = (digit(a), digit(b));
+            to[start[da] as usize] = a;
+            start[da] += 1;
+            end[db] -= 1;
+            to[end[db] as usize] = b;
+        }
+        if back.len() > front.len() {
+            let b = back[0];
+            let db = digit(b);
+            end[db] -= 1;
+            to[end[db] as usize] = b;
         }
         in_spare = !in_spare;
     }
