@@ -230,6 +230,20 @@ fn sweep(
     axis: usize,
     best: &mut Option<(f64, usize, usize)>,
 ) -> Aabb {
+    if let [a, b] = *run {
+        // Two primitives, one partition: priced as the loops below would
+        // price it (the right area through `f32`), without their set-up.
+        let (a, b) = (&boxes[a as usize], &boxes[b as usize]);
+        let (al, ar) = (half_area(a), half_area(b) as f32 as f64);
+        let c = match builder {
+            Builder::Tdbs => (al - ar).abs(),
+            _ => al + ar,
+        };
+        if best.is_none_or(|b| c < b.0) {
+            *best = Some((c, axis, 1));
+        }
+        return a.union(b);
+    }
     let suffix = &mut suffix[..run.len()];
     let right = suffix_areas(run, boxes, suffix);
     let found = match builder {
@@ -435,6 +449,7 @@ mod tests {
         let mut run = [0u32; 300];
         let (mut skipped, mut tried) = (0, 0);
         for round in 0..400 {
+            // Every length from 2 (the short cut) to 300, twice at the ends.
             let n = 2 + round % 299;
             for b in boxes[..n].iter_mut() {
                 let c = crate::Vec3::new(g.next_f32(), g.next_f32(), g.next_f32()) * 100.0;
@@ -469,6 +484,30 @@ mod tests {
                     want.map(|(c, k)| (c.to_bits(), k)),
                     "round {round} n {n} to_beat {to_beat:?}"
                 );
+                // The same through `sweep` (two primitives take a short
+                // cut there), which also hands back the run's box.
+                let mut spare = [0.0f32; 300];
+                let mut best = to_beat.map(|c| (c, 3, 0));
+                let bounds = sweep(
+                    &run[..n],
+                    &boxes,
+                    &mut spare,
+                    Builder::TdbsSah,
+                    axis,
+                    &mut best,
+                );
+                let want = want
+                    .map(|(c, k)| (c, axis, k))
+                    .or(to_beat.map(|c| (c, 3, 0)));
+                assert_eq!(
+                    best.map(|(c, a, k)| (c.to_bits(), a, k)),
+                    want.map(|(c, a, k)| (c.to_bits(), a, k)),
+                    "round {round} n {n} to_beat {to_beat:?}"
+                );
+                let all = run[..n]
+                    .iter()
+                    .fold(Aabb::EMPTY, |b, &p| b.union(&boxes[p as usize]));
+                assert_eq!(bounds, all);
             }
             tried += 1;
             skipped += (want_skips(&run[..n], &boxes, &suffix) > 0) as u32;
