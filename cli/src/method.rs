@@ -227,7 +227,7 @@ impl Method {
     pub fn help() -> String {
         let names: Vec<String> = Method::all().iter().map(|m| m.to_string()).collect();
         format!(
-            "{}, kd-paper, kd-paper-rope, kd-paper-packet, kd-c, kd-c1, slcts1d:N, slcts2d:NxM, \
+            "{}, kd-paper, kd-paper-rope, kd-paper-packet, kd-c, kd-c1, slcts1d:N, slcts2d:NxM, wide:N, \
              and proj-BUILDER-CRITERIA-SCHEME (BUILDER {}, CRITERIA 2d|dummy, SCHEME 2d|3d|comb)",
             names.join(", "),
             PROJ_BUILDERS.join("|")
@@ -266,6 +266,10 @@ impl Method {
         let window = |v: &str| v.parse::<u32>().ok().filter(|&n| (2..=1024).contains(&n));
         if let Some(n) = s.strip_prefix("slcts1d:") {
             return cast(Scheme::Slcts1d { n: window(n)? });
+        }
+        if let Some(n) = s.strip_prefix("wide:") {
+            let leaf_size = n.parse::<u32>().ok().filter(|&n| (1..=64).contains(&n))?;
+            return Some(Method::Wide { leaf_size });
         }
         if let Some(nm) = s.strip_prefix("slcts2d:") {
             let (n, m) = nm.split_once('x')?;
@@ -357,7 +361,10 @@ impl fmt::Display for Method {
                 Scheme::Ropes => f.write_str("cast-ropes"),
             },
             Method::Bvh { name, .. } => f.write_str(name),
-            Method::Wide { .. } => f.write_str("wide"),
+            Method::Wide {
+                leaf_size: WIDE_LEAF_SIZE,
+            } => f.write_str("wide"),
+            Method::Wide { leaf_size } => write!(f, "wide:{leaf_size}"),
             Method::Proj(p) => {
                 let c = match p.criteria {
                     Criteria::TwoD => "2d",
@@ -391,6 +398,7 @@ mod tests {
         all.push(Method::Cast {
             scheme: Scheme::Slcts1d { n: 9 },
         });
+        all.push(Method::Wide { leaf_size: 8 });
         for m in [
             "kd-paper",
             "kd-paper-rope",
@@ -415,6 +423,9 @@ mod tests {
             "slcts1d:",
             "slcts1d:-2",
             "slcts1d:1",
+            "wide:0",
+            "wide:65",
+            "wide:",
             "hlcts2d:4x4",
             "proj-tdbs-dummy-3d",
             "proj-x-2d-2d",

@@ -98,7 +98,30 @@ pub(crate) enum LeafRule {
     Sah {
         /// A traversal step's cost in primitive tests.
         traversal: f64,
+        /// What a triangle's test costs against a sphere's or a cone's
+        /// (1: all alike): the SAH counts each primitive at its kind's
+        /// cost, so splits and leaves weigh what testing them costs.
+        triangle: f64,
     },
+}
+
+/// The cost of testing primitive `p` in units of a sphere's test: `tw`
+/// for the scene's first `nt` (its triangles), 1 for the rest.
+#[derive(Clone, Copy)]
+struct Weights {
+    nt: usize,
+    tw: f64,
+}
+
+impl Weights {
+    #[inline(always)]
+    fn of(&self, p: u32) -> f64 {
+        if (p as usize) < self.nt {
+            self.tw
+        } else {
+            1.0
+        }
+    }
 }
 
 pub(crate) fn build<'a>(
@@ -153,6 +176,13 @@ pub(crate) fn build<'a>(
         o.copy_from_slice(&refs[..n]);
         crate::sort_key::radix_sort_by_key(o, right_side, |p| c[p as usize]);
     }
+    let weights = match rule {
+        LeafRule::Sah { triangle, .. } if triangle != 1.0 => Some(Weights {
+            nt: scene.triangles.len(),
+            tw: triangle,
+        }),
+        _ => None,
+    };
     let pair = |i: usize| i.div_ceil(2);
     level[0] = 0;
     let (mut top, mut i, mut depth) = (1usize, 0usize, 0u32);
@@ -179,16 +209,22 @@ pub(crate) fn build<'a>(
                 boxes,
                 suffix,
                 builder,
+                weights,
                 axis,
                 &mut best,
             );
         }
         let (c, axis, k) = best.expect("count >= 2");
-        if let (true, LeafRule::Sah { traversal }) = (small, rule) {
+        if let (true, LeafRule::Sah { traversal, .. }) = (small, rule) {
             // The sweep's criterion is A_L n_L + A_R n_R: the split's
-            // tests in units of the node's area times one test.
+            // tests in units of the node's area times one test (n: the
+            // sides' weights, when primitives weigh by kind).
             let a = half_area(&bounds);
-            if c + traversal * a >= a * count as f64 {
+            let tests = match weights {
+                Some(w) => refs[first..first + count].iter().map(|&p| w.of(p)).sum(),
+                None => count as f64,
+            };
+            if c + traversal * a >= a * tests {
                 nodes[i] = BvhNode::leaf(&bounds, first as u32, count as u32);
                 depth = depth.max(d);
                 i += 1;
@@ -222,21 +258,24 @@ pub(crate) fn build<'a>(
 /// smaller (ties keep the earlier axis and count); `suffix` holds the
 /// right sides' areas meanwhile. The builder picks the sweep once, outside
 /// the loops; each keeps the best so far in locals.
+#[allow(clippy::too_many_arguments)]
 fn sweep(
     run: &[u32],
     boxes: &[Aabb],
     suffix: &mut [f32],
     builder: Builder,
+    weights: Option<Weights>,
     axis: usize,
     best: &mut Option<(f64, usize, usize)>,
 ) -> Aabb {
-    if let [a, b] = *run {
+    if let [pa, pb] = *run {
         // Two primitives, one partition: priced as the loops below would
         // price it (the right area through `f32`), without their set-up.
-        let (a, b) = (&boxes[a as usize], &boxes[b as usize]);
+        let (a, b) = (&boxes[pa as usize], &boxes[pb as usize]);
         let (al, ar) = (half_area(a), half_area(b) as f32 as f64);
-        let c = match builder {
-            Builder::Tdbs => (al - ar).abs(),
+        let c = match (builder, weights) {
+            (Builder::Tdbs, _) => (al - ar).abs(),
+            (_, Some(w)) => al * w.of(pa) + ar * w.of(pb),
             _ => al + ar,
         };
         if best.is_none_or(|b| c < b.0) {
@@ -246,9 +285,14 @@ fn sweep(
     }
     let suffix = &mut suffix[..run.len()];
     let right = suffix_areas(run, boxes, suffix);
-    let found = match builder {
-        Builder::Tdbs => sweep_balanced(run, boxes, suffix, best.map(|b| b.0)),
-        _ => sweep_sah(run, boxes, suffix, best.map(|b| b.0)),
+    let to_beat = best.map(|b| b.0);
+    let found = match (builder, weights) {
+        (Builder::Tdbs, _) => sweep_balanced(run, boxes, suffix, to_beat),
+        (_, Some(w)) => {
+            let total = run.iter().map(|&p| w.of(p)).sum();
+            sweep_sah(run, boxes, suffix, to_beat, total, |p| w.of(p))
+        }
+        _ => sweep_sah(run, boxes, suffix, to_beat, run.len() as f64, |_| 1.0),
     };
     if let Some((c, k)) = found {
         *best = Some((c, axis, k));
@@ -299,14 +343,23 @@ fn sweep_balanced(run: &[u32], boxes: &[Aabb], suffix: &[f32], to_beat: Option<f
 /// step is monotone), so the skipped ones are exactly those that could not
 /// have been smaller: the same tree as pricing all. About a quarter of
 /// the partitions get priced (SPD balls, rings, tree; random).
-fn sweep_sah(run: &[u32], boxes: &[Aabb], suffix: &[f32], to_beat: Option<f64>) -> Found {
+#[inline(always)]
+fn sweep_sah(
+    run: &[u32],
+    boxes: &[Aabb],
+    suffix: &[f32],
+    to_beat: Option<f64>,
+    total: f64,
+    weight: impl Fn(u32) -> f64,
+) -> Found {
     let count = run.len();
     let mut left = boxes[run[0] as usize];
     let mut left_area = half_area(&left);
-    // k and count - k as f64, counted (exact: far below 2^53), not
-    // converted from usize at every step.
-    let (mut kf, mut rest) = (1.0f64, (count - 1) as f64);
-    let c = left_area + suffix[1] as f64 * rest;
+    // The sides' weights (k and count - k when every primitive weighs 1),
+    // counted as f64, not converted from usize at every step.
+    let mut kf = weight(run[0]);
+    let mut rest = total - kf;
+    let c = left_area * kf + suffix[1] as f64 * rest;
     // The first partition of all wins outright (whatever it prices).
     let mut found = match to_beat {
         Some(b) if !(c < b) => None,
@@ -316,7 +369,8 @@ fn sweep_sah(run: &[u32], boxes: &[Aabb], suffix: &[f32], to_beat: Option<f64>) 
     for (k, (&p, &s)) in run[1..count - 1].iter().zip(&suffix[2..count]).enumerate() {
         let k = k + 2;
         left = left.union(&boxes[p as usize]);
-        (kf, rest) = (kf + 1.0, rest - 1.0);
+        let w = weight(p);
+        (kf, rest) = (kf + w, rest - w);
         let right = s as f64 * rest;
         if left_area * kf + right >= best_c {
             continue;
@@ -429,13 +483,25 @@ mod tests {
     /// them, against no best yet and against bests it must beat.
     #[test]
     fn the_bounded_sah_sweep_picks_what_pricing_every_partition_picks() {
-        fn price_all(run: &[u32], boxes: &[Aabb], suffix: &[f32], to_beat: Option<f64>) -> Found {
+        // Weights of 1/2 and 1 sum exactly in any order, so the reference
+        // may sum each side afresh.
+        fn price_all(
+            run: &[u32],
+            boxes: &[Aabb],
+            suffix: &[f32],
+            to_beat: Option<f64>,
+            w: &dyn Fn(u32) -> f64,
+        ) -> Found {
             let n = run.len();
             let mut found: Found = None;
             let mut left = Aabb::EMPTY;
             for k in 1..n {
                 left = left.union(&boxes[run[k - 1] as usize]);
-                let c = half_area(&left) * k as f64 + suffix[k] as f64 * (n - k) as f64;
+                let (wl, wr): (f64, f64) = (
+                    run[..k].iter().map(|&p| w(p)).sum(),
+                    run[k..].iter().map(|&p| w(p)).sum(),
+                );
+                let c = half_area(&left) * wl + suffix[k] as f64 * wr;
                 let beat = found.map(|f| f.0).or(to_beat);
                 if beat.is_none_or(|b| c < b) {
                     found = Some((c, k));
@@ -474,40 +540,48 @@ mod tests {
             let axis = round % 3;
             sort_run(&mut run[..n], &boxes, axis);
             suffix_areas(&run[..n], &boxes, &mut suffix[..n]);
-            let all = price_all(&run[..n], &boxes, &suffix, None);
-            let best = all.expect("n >= 2").0;
-            for to_beat in [None, Some(best * 1.5), Some(best), Some(best * 0.5)] {
-                let want = price_all(&run[..n], &boxes, &suffix, to_beat);
-                let got = sweep_sah(&run[..n], &boxes, &suffix, to_beat);
-                assert_eq!(
-                    got.map(|(c, k)| (c.to_bits(), k)),
-                    want.map(|(c, k)| (c.to_bits(), k)),
-                    "round {round} n {n} to_beat {to_beat:?}"
-                );
-                // The same through `sweep` (two primitives take a short
-                // cut there), which also hands back the run's box.
-                let mut spare = [0.0f32; 300];
-                let mut best = to_beat.map(|c| (c, 3, 0));
-                let bounds = sweep(
-                    &run[..n],
-                    &boxes,
-                    &mut spare,
-                    Builder::TdbsSah,
-                    axis,
-                    &mut best,
-                );
-                let want = want
-                    .map(|(c, k)| (c, axis, k))
-                    .or(to_beat.map(|c| (c, 3, 0)));
-                assert_eq!(
-                    best.map(|(c, a, k)| (c.to_bits(), a, k)),
-                    want.map(|(c, a, k)| (c.to_bits(), a, k)),
-                    "round {round} n {n} to_beat {to_beat:?}"
-                );
-                let all = run[..n]
-                    .iter()
-                    .fold(Aabb::EMPTY, |b, &p| b.union(&boxes[p as usize]));
-                assert_eq!(bounds, all);
+            // Every primitive alike, and the first half (the "triangles")
+            // at half the cost of the rest.
+            let halves = Weights { nt: n / 2, tw: 0.5 };
+            for weights in [None, Some(halves)] {
+                let w = |p: u32| weights.map_or(1.0, |w| w.of(p));
+                let total: f64 = run[..n].iter().map(|&p| w(p)).sum();
+                let all = price_all(&run[..n], &boxes, &suffix, None, &w);
+                let best = all.expect("n >= 2").0;
+                for to_beat in [None, Some(best * 1.5), Some(best), Some(best * 0.5)] {
+                    let want = price_all(&run[..n], &boxes, &suffix, to_beat, &w);
+                    let got = sweep_sah(&run[..n], &boxes, &suffix, to_beat, total, w);
+                    assert_eq!(
+                        got.map(|(c, k)| (c.to_bits(), k)),
+                        want.map(|(c, k)| (c.to_bits(), k)),
+                        "round {round} n {n} to_beat {to_beat:?}"
+                    );
+                    // The same through `sweep` (two primitives take a short
+                    // cut there), which also hands back the run's box.
+                    let mut spare = [0.0f32; 300];
+                    let mut best = to_beat.map(|c| (c, 3, 0));
+                    let bounds = sweep(
+                        &run[..n],
+                        &boxes,
+                        &mut spare,
+                        Builder::TdbsSah,
+                        weights,
+                        axis,
+                        &mut best,
+                    );
+                    let want = want
+                        .map(|(c, k)| (c, axis, k))
+                        .or(to_beat.map(|c| (c, 3, 0)));
+                    assert_eq!(
+                        best.map(|(c, a, k)| (c.to_bits(), a, k)),
+                        want.map(|(c, a, k)| (c.to_bits(), a, k)),
+                        "round {round} n {n} to_beat {to_beat:?}"
+                    );
+                    let all = run[..n]
+                        .iter()
+                        .fold(Aabb::EMPTY, |b, &p| b.union(&boxes[p as usize]));
+                    assert_eq!(bounds, all);
+                }
             }
             tried += 1;
             skipped += (want_skips(&run[..n], &boxes, &suffix) > 0) as u32;
@@ -587,7 +661,7 @@ mod tests {
             let mut best: Option<(f64, usize, usize)> = None;
             for axis in 0..3 {
                 sort_run(run, boxes, axis);
-                sweep(run, boxes, suffix, builder, axis, &mut best);
+                sweep(run, boxes, suffix, builder, None, axis, &mut best);
             }
             let (_, axis, k) = best.expect("count >= 2");
             if axis != 2 {
@@ -727,8 +801,23 @@ mod tests {
             (*b.info(), n.to_vec(), r.to_vec())
         };
         let size = run(LeafRule::Size, 4);
-        assert_eq!(size, run(LeafRule::Sah { traversal: 1e30 }, 4));
-        let (free, _, _) = run(LeafRule::Sah { traversal: 0.0 }, 4);
+        assert_eq!(
+            size,
+            run(
+                LeafRule::Sah {
+                    traversal: 1e30,
+                    triangle: 1.0
+                },
+                4
+            )
+        );
+        let (free, _, _) = run(
+            LeafRule::Sah {
+                traversal: 0.0,
+                triangle: 1.0,
+            },
+            4,
+        );
         assert_eq!(free.leaf_count as usize, N);
         assert!(size.0.leaf_count < free.leaf_count);
     }

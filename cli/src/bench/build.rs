@@ -249,9 +249,9 @@ columns: prims = primitives after triangulation; per builder: ms = best build ti
   to one pass on one thread); x = kd-auto's time over Embree's at one thread, xN = at N.
   kd-auto keeps no ropes (hierarchical and packet traversal need none; with ropes, for
   rope traversal and the LCTS casts, a leaf takes 48 bytes more); kd-paper keeps them.
-  wide = tdbs-sah's build (leaves of up to 4 where the SAH prices them lower) collapsed
-  into 4-wide nodes; its +s holds the binary hierarchy and the node room the collapse did
-  not use. Primary Mr/s: the scene's primary rays (one per pixel at --res, in 4 x 2 pixel
+  wide = tdbs-sah's sweep with a triangle priced at half a sphere's test (leaves of up to
+  4 where the SAH prices them lower), collapsed into 4-wide nodes; its +s holds the binary
+  hierarchy and the node room the collapse did not use. Primary Mr/s: the scene's primary rays (one per pixel at --res, in 4 x 2 pixel
   blocks) on one thread through kd-auto's tree, hierarchical (kd) and in packets
   (kd-packet), and through Embree's scene (e1 = rtcIntersect1, e8 = rtcIntersect8); best
   of --repeat runs, methods interleaved; mism = rays answering otherwise than kd.";
