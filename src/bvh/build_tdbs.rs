@@ -105,6 +105,18 @@ pub(crate) enum LeafRule {
     },
 }
 
+/// What a node's sweeps minimise, chosen once per build (never per
+/// partition).
+#[derive(Clone, Copy)]
+enum Criterion {
+    /// TDBS: children of most nearly equal area, `|A_L - A_R|`.
+    Balanced,
+    /// The SAH, `A_L n_L + A_R n_R`, every primitive one test.
+    Sah,
+    /// The SAH with each side's primitives priced by kind.
+    SahWeighted(Weights),
+}
+
 /// The cost of testing primitive `p` in units of a sphere's test: `tw`
 /// for the scene's first `nt` (its triangles), 1 for the rest.
 #[derive(Clone, Copy)]
@@ -176,12 +188,13 @@ pub(crate) fn build<'a>(
         o.copy_from_slice(&refs[..n]);
         crate::sort_key::radix_sort_by_key(o, right_side, |p| c[p as usize]);
     }
-    let weights = match rule {
-        LeafRule::Sah { triangle, .. } if triangle != 1.0 => Some(Weights {
+    let criterion = match (builder, rule) {
+        (Builder::Tdbs, _) => Criterion::Balanced,
+        (_, LeafRule::Sah { triangle, .. }) if triangle != 1.0 => Criterion::SahWeighted(Weights {
             nt: scene.triangles.len(),
             tw: triangle,
         }),
-        _ => None,
+        _ => Criterion::Sah,
     };
     let pair = |i: usize| i.div_ceil(2);
     level[0] = 0;
@@ -208,8 +221,7 @@ pub(crate) fn build<'a>(
                 &o[first..first + count],
                 boxes,
                 suffix,
-                builder,
-                weights,
+                criterion,
                 axis,
                 &mut best,
             );
@@ -220,9 +232,11 @@ pub(crate) fn build<'a>(
             // tests in units of the node's area times one test (n: the
             // sides' weights, when primitives weigh by kind).
             let a = half_area(&bounds);
-            let tests = match weights {
-                Some(w) => refs[first..first + count].iter().map(|&p| w.of(p)).sum(),
-                None => count as f64,
+            let tests = match criterion {
+                Criterion::SahWeighted(w) => {
+                    refs[first..first + count].iter().map(|&p| w.of(p)).sum()
+                }
+                _ => count as f64,
             };
             if c + traversal * a >= a * tests {
                 nodes[i] = BvhNode::leaf(&bounds, first as u32, count as u32);
@@ -253,18 +267,16 @@ pub(crate) fn build<'a>(
     Ok(binary(scene, nodes, refs, top, n, depth))
 }
 
-/// The builder's criterion at every linear partition of `run` (sorted by
-/// centre on `axis`), kept in `best` as (criterion, axis, left count) when
-/// smaller (ties keep the earlier axis and count); `suffix` holds the
-/// right sides' areas meanwhile. The builder picks the sweep once, outside
-/// the loops; each keeps the best so far in locals.
-#[allow(clippy::too_many_arguments)]
+/// The criterion at every linear partition of `run` (sorted by centre on
+/// `axis`), kept in `best` as (criterion, axis, left count) when smaller
+/// (ties keep the earlier axis and count); `suffix` holds the right
+/// sides' areas meanwhile. Each sweep keeps the best so far in locals.
+/// Returns the run's box.
 fn sweep(
     run: &[u32],
     boxes: &[Aabb],
     suffix: &mut [f32],
-    builder: Builder,
-    weights: Option<Weights>,
+    criterion: Criterion,
     axis: usize,
     best: &mut Option<(f64, usize, usize)>,
 ) -> Aabb {
@@ -273,10 +285,10 @@ fn sweep(
         // price it (the right area through `f32`), without their set-up.
         let (a, b) = (&boxes[pa as usize], &boxes[pb as usize]);
         let (al, ar) = (half_area(a), half_area(b) as f32 as f64);
-        let c = match (builder, weights) {
-            (Builder::Tdbs, _) => (al - ar).abs(),
-            (_, Some(w)) => al * w.of(pa) + ar * w.of(pb),
-            _ => al + ar,
+        let c = match criterion {
+            Criterion::Balanced => (al - ar).abs(),
+            Criterion::Sah => al + ar,
+            Criterion::SahWeighted(w) => al * w.of(pa) + ar * w.of(pb),
         };
         if best.is_none_or(|b| c < b.0) {
             *best = Some((c, axis, 1));
@@ -286,13 +298,13 @@ fn sweep(
     let suffix = &mut suffix[..run.len()];
     let right = suffix_areas(run, boxes, suffix);
     let to_beat = best.map(|b| b.0);
-    let found = match (builder, weights) {
-        (Builder::Tdbs, _) => sweep_balanced(run, boxes, suffix, to_beat),
-        (_, Some(w)) => {
+    let found = match criterion {
+        Criterion::Balanced => sweep_balanced(run, boxes, suffix, to_beat),
+        Criterion::Sah => sweep_sah(run, boxes, suffix, to_beat, run.len() as f64, |_| 1.0),
+        Criterion::SahWeighted(w) => {
             let total = run.iter().map(|&p| w.of(p)).sum();
             sweep_sah(run, boxes, suffix, to_beat, total, |p| w.of(p))
         }
-        _ => sweep_sah(run, boxes, suffix, to_beat, run.len() as f64, |_| 1.0),
     };
     if let Some((c, k)) = found {
         *best = Some((c, axis, k));
@@ -564,8 +576,7 @@ mod tests {
                         &run[..n],
                         &boxes,
                         &mut spare,
-                        Builder::TdbsSah,
-                        weights,
+                        weights.map_or(Criterion::Sah, Criterion::SahWeighted),
                         axis,
                         &mut best,
                     );
@@ -661,7 +672,11 @@ mod tests {
             let mut best: Option<(f64, usize, usize)> = None;
             for axis in 0..3 {
                 sort_run(run, boxes, axis);
-                sweep(run, boxes, suffix, builder, None, axis, &mut best);
+                let criterion = match builder {
+                    Builder::Tdbs => Criterion::Balanced,
+                    _ => Criterion::Sah,
+                };
+                sweep(run, boxes, suffix, criterion, axis, &mut best);
             }
             let (_, axis, k) = best.expect("count >= 2");
             if axis != 2 {
