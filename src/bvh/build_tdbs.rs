@@ -25,7 +25,12 @@ fn centre(b: &Aabb, axis: usize) -> f32 {
 #[inline(always)]
 fn half_area(b: &Aabb) -> f64 {
     debug_assert!(!b.is_empty());
-    let e = (b.max - b.min).as_dvec3();
+    half_area_of((b.max - b.min).as_dvec3())
+}
+
+/// Half the surface area of a box of extent `e` (products exact in f64).
+#[inline(always)]
+fn half_area_of(e: glam::DVec3) -> f64 {
     e.x * e.y + e.y * e.z + e.z * e.x
 }
 
@@ -52,8 +57,7 @@ impl Grown {
     /// [`half_area`] of the box, to the bit.
     #[inline(always)]
     fn half_area(&self) -> f64 {
-        let e = (self.max - self.min).as_dvec3();
-        e.x * e.y + e.y * e.z + e.z * e.x
+        half_area_of((self.max - self.min).as_dvec3())
     }
 
     fn aabb(&self) -> Aabb {
@@ -213,6 +217,11 @@ pub(crate) fn build<'a>(
             i += 1;
             continue;
         }
+        // The node's primitive tests: its count, or priced by kind.
+        let tests = match criterion {
+            Criterion::SahWeighted(w) => refs[first..first + count].iter().map(|&p| w.of(p)).sum(),
+            _ => count as f64,
+        };
         // (criterion, axis, left count): smaller criterion is better.
         let mut best: Option<(f64, usize, usize)> = None;
         let mut bounds = Aabb::EMPTY;
@@ -222,6 +231,7 @@ pub(crate) fn build<'a>(
                 boxes,
                 suffix,
                 criterion,
+                tests,
                 axis,
                 &mut best,
             );
@@ -232,12 +242,6 @@ pub(crate) fn build<'a>(
             // tests in units of the node's area times one test (n: the
             // sides' weights, when primitives weigh by kind).
             let a = half_area(&bounds);
-            let tests = match criterion {
-                Criterion::SahWeighted(w) => {
-                    refs[first..first + count].iter().map(|&p| w.of(p)).sum()
-                }
-                _ => count as f64,
-            };
             if c + traversal * a >= a * tests {
                 nodes[i] = BvhNode::leaf(&bounds, first as u32, count as u32);
                 depth = depth.max(d);
@@ -271,12 +275,14 @@ pub(crate) fn build<'a>(
 /// `axis`), kept in `best` as (criterion, axis, left count) when smaller
 /// (ties keep the earlier axis and count); `suffix` holds the right
 /// sides' areas meanwhile. Each sweep keeps the best so far in locals.
-/// Returns the run's box.
+/// `tests` is the run's primitive tests (its length, or its primitives
+/// priced by kind for [`Criterion::SahWeighted`]). Returns the run's box.
 fn sweep(
     run: &[u32],
     boxes: &[Aabb],
     suffix: &mut [f32],
     criterion: Criterion,
+    tests: f64,
     axis: usize,
     best: &mut Option<(f64, usize, usize)>,
 ) -> Aabb {
@@ -300,11 +306,8 @@ fn sweep(
     let to_beat = best.map(|b| b.0);
     let found = match criterion {
         Criterion::Balanced => sweep_balanced(run, boxes, suffix, to_beat),
-        Criterion::Sah => sweep_sah(run, boxes, suffix, to_beat, run.len() as f64, |_| 1.0),
-        Criterion::SahWeighted(w) => {
-            let total = run.iter().map(|&p| w.of(p)).sum();
-            sweep_sah(run, boxes, suffix, to_beat, total, |p| w.of(p))
-        }
+        Criterion::Sah => sweep_sah(run, boxes, suffix, to_beat, tests, |_| 1.0),
+        Criterion::SahWeighted(w) => sweep_sah(run, boxes, suffix, to_beat, tests, |p| w.of(p)),
     };
     if let Some((c, k)) = found {
         *best = Some((c, axis, k));
@@ -577,6 +580,7 @@ mod tests {
                         &boxes,
                         &mut spare,
                         weights.map_or(Criterion::Sah, Criterion::SahWeighted),
+                        total,
                         axis,
                         &mut best,
                     );
@@ -676,7 +680,15 @@ mod tests {
                     Builder::Tdbs => Criterion::Balanced,
                     _ => Criterion::Sah,
                 };
-                sweep(run, boxes, suffix, criterion, axis, &mut best);
+                sweep(
+                    run,
+                    boxes,
+                    suffix,
+                    criterion,
+                    run.len() as f64,
+                    axis,
+                    &mut best,
+                );
             }
             let (_, axis, k) = best.expect("count >= 2");
             if axis != 2 {
