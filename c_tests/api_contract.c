@@ -239,6 +239,31 @@ int main(void) {
         CHECK_STATUS(coray_kdtree_occluded1(&tree, 1, &rays[i], &o, &stack, sizeof stack, NULL), CORAY_STATUS_OK);
         CHECK(same_hits(&h, &hits[i], 1) && o == occ[i]);
     }
+    /* A tracer per thread: the same answers, its statistics summed; a
+       tracer the make call did not fill is refused. */
+    {
+        static KdStack tstack;
+        CorayTracer tracer, zeroed;
+        CorayTraceStats ts_all = {.struct_size = sizeof ts_all}, ts_one = {.struct_size = sizeof ts_one};
+        memset(&zeroed, 0, sizeof zeroed);
+        CHECK_STATUS(coray_kdtree_tracer(&tree, 7, &tstack, sizeof tstack, &tracer), CORAY_STATUS_INVALID_PARAMETER);
+        CHECK_STATUS(coray_kdtree_tracer(&tree, CORAY_TRAVERSAL_ROPES, &tstack, sizeof tstack - 1, &tracer), CORAY_STATUS_ARENA_TOO_SMALL);
+        CHECK_STATUS(coray_kdtree_tracer(&tree, CORAY_TRAVERSAL_ROPES, &tstack, sizeof tstack, &tracer), CORAY_STATUS_OK);
+        for (i = 0; i < 512; i++) {
+            CorayHit h;
+            uint8_t o;
+            CHECK_STATUS(coray_kdtree_tracer_intersect1(&tracer, &rays[i], &h), CORAY_STATUS_OK);
+            CHECK_STATUS(coray_kdtree_tracer_occluded1(&tracer, &rays[i], &o), CORAY_STATUS_OK);
+            CHECK(same_hits(&h, &hits[i], 1) && o == occ[i]);
+        }
+        CHECK_STATUS(coray_kdtree_tracer_intersect1(&zeroed, &rays[0], &hits2[0]), CORAY_STATUS_INVALID_PARAMETER);
+        CHECK_STATUS(coray_kdtree_tracer_intersect1(&tracer, NULL, &hits2[0]), CORAY_STATUS_NULL_POINTER);
+        CHECK_STATUS(coray_kdtree_tracer_intersect1(&tracer, &rays[0], (CorayHit *)&rays[0]), CORAY_STATUS_INVALID_PARAMETER);
+        CHECK_STATUS(coray_tracer_stats(&tracer, &ts_one), CORAY_STATUS_OK);
+        CHECK_STATUS(coray_kdtree_intersect(&tree, CORAY_TRAVERSAL_ROPES, rays, hits2, 512, &stack, sizeof stack, &ts_all), CORAY_STATUS_OK);
+        CHECK(ts_one.rays == 1024 && ts_all.rays == 512);
+        CHECK(ts_one.traversal_steps > ts_all.traversal_steps && ts_one.prim_tests >= ts_all.prim_tests);
+    }
 
     /* Relocation: copy the arena elsewhere; save it to a file and load it. */
     copy = arena_alloc(info.arena_bytes_used);

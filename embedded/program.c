@@ -297,6 +297,17 @@ static void kd_tree(const BoardScene *s, CorayKdPreset preset, const char *tag) 
                        one.prim_id == hits[i].prim_id,
                    n, "intersect1 differs from the array call", st);
         }
+        /* A tracer (the one-ray calls a renderer makes): the same hits. */
+        CorayTracer tracer;
+        st = coray_kdtree_tracer(&tree, travs[t].t, stack, sizeof stack, &tracer);
+        expect(st == CORAY_STATUS_OK, n, "kd tracer", st);
+        for (size_t i = 3; i < PIXELS; i += 7) {
+            CorayHit one;
+            st = coray_kdtree_tracer_intersect1(&tracer, &rays[i], &one);
+            expect(st == CORAY_STATUS_OK && bits(one.t) == bits(hits[i].t) &&
+                       one.prim_id == hits[i].prim_id,
+                   n, "the tracer differs from the array call", st);
+        }
     }
     check(n, "primary rays", first);
     size_t ns = shadow_rays(s);

@@ -148,7 +148,11 @@ static void *render_rows(void *arg) {
     Job *j = arg;
     const Nff *s = j->nff;
     _Alignas(16) static _Thread_local unsigned char stack[CORAY_KDTREE_STACK_BYTES];
+    /* One tracer per thread: the checks once, then one call per ray. */
+    CorayTracer tracer;
     int w = s->width, h = s->height, y;
+    if (coray_kdtree_tracer(j->tree, CORAY_TRAVERSAL_HIERARCHICAL, stack, sizeof stack, &tracer) != CORAY_STATUS_OK)
+        exit(3);
     while ((y = atomic_fetch_add(&j->next_row, 1)) < h) {
         for (int x = 0; x < w; x++) {
             float sx = (2.0f * ((float)x + 0.5f) / (float)w - 1.0f), sy = (1.0f - 2.0f * ((float)y + 0.5f) / (float)h);
@@ -161,7 +165,7 @@ static void *render_rows(void *arg) {
             }
             ray.tnear = 0;
             ray.tfar = INFINITY;
-            if (coray_kdtree_intersect1(j->tree, CORAY_TRAVERSAL_HIERARCHICAL, &ray, &hit, stack, sizeof stack, NULL) != CORAY_STATUS_OK)
+            if (coray_kdtree_tracer_intersect1(&tracer, &ray, &hit) != CORAY_STATUS_OK)
                 exit(3);
             memcpy(c, s->background, sizeof c);
             if (hit.geom_id != CORAY_INVALID_ID) {
@@ -188,8 +192,7 @@ static void *render_rows(void *arg) {
                     }
                     sh.tnear = 1e-4f * (len > 1 ? len : 1);
                     sh.tfar = len;
-                    if (coray_kdtree_occluded1(j->tree, CORAY_TRAVERSAL_HIERARCHICAL, &sh, &blocked, stack, sizeof stack, NULL) !=
-                        CORAY_STATUS_OK)
+                    if (coray_kdtree_tracer_occluded1(&tracer, &sh, &blocked) != CORAY_STATUS_OK)
                         exit(3);
                     if (!blocked)
                         for (int k = 0; k < 3; k++) c[k] += base[k] * dot3(n, d) / sqrtf((float)(s->lights.n / 3));

@@ -14,7 +14,7 @@
 #define CORAY_VERSION_MAJOR 1
 
 // Minor version: new functions or struct fields, compatible.
-#define CORAY_VERSION_MINOR 4
+#define CORAY_VERSION_MINOR 5
 
 // Patch version: fixes only.
 #define CORAY_VERSION_PATCH 0
@@ -276,6 +276,15 @@ typedef struct CorayHit {
   // Index within that geometry's array, or `CORAY_INVALID_ID`.
   uint32_t prim_id;
 } CorayHit;
+
+// One thread's tracer: fill it with `coray_kdtree_tracer`,
+// `coray_bvh_tracer`, `coray_proj_tracer` or `coray_wide_tracer`, then
+// pass it to that family's `_tracer_intersect1` and `_tracer_occluded1`.
+// Written by every call on it: one thread at a time.
+typedef struct CorayTracer {
+  // Opaque to the caller.
+  uint64_t opaque[24];
+} CorayTracer;
 
 // A pinhole camera as NFF's `v` block gives it.
 typedef struct CorayCamera {
@@ -793,7 +802,9 @@ enum CorayStatus coray_bvh_intersect(const struct CorayBvh *bvh,
                                      size_t stack_bytes,
                                      struct CorayTraceStats *stats);
 
-// `coray_bvh_intersect` for one ray.
+// `coray_bvh_intersect` for one ray, checked in full on every call. A thread
+// tracing one ray per call makes a tracer (`coray_bvh_tracer`) and calls
+// `coray_bvh_tracer_intersect1`: the same answer, the checks made once.
 //
 // Safety: as `coray_bvh_intersect` with `count` 1.
 enum CorayStatus coray_bvh_intersect1(const struct CorayBvh *bvh,
@@ -816,7 +827,9 @@ enum CorayStatus coray_bvh_occluded(const struct CorayBvh *bvh,
                                     size_t stack_bytes,
                                     struct CorayTraceStats *stats);
 
-// `coray_bvh_occluded` for one ray.
+// `coray_bvh_occluded` for one ray, checked in full on every call. A thread
+// tracing one ray per call makes a tracer (`coray_bvh_tracer`) and calls
+// `coray_bvh_tracer_occluded1`: the same answer, the checks made once.
 //
 // Safety: as `coray_bvh_occluded` with `count` 1.
 enum CorayStatus coray_bvh_occluded1(const struct CorayBvh *bvh,
@@ -825,6 +838,46 @@ enum CorayStatus coray_bvh_occluded1(const struct CorayBvh *bvh,
                                      void *stack,
                                      size_t stack_bytes,
                                      struct CorayTraceStats *stats);
+
+// Makes `tracer` trace `bvh` with the caller's `stack` (at least the
+// info's `stack_bytes`, 16-byte aligned): one thread's
+// `coray_bvh_tracer_intersect1` and `_occluded1` calls then skip the checks
+// this call makes. Since 1.5.
+//
+// Safety: `bvh` as in `coray_bvh_info`; `stack` NULL or writable
+// for `stack_bytes`, and used by nothing else while the tracer is;
+// `tracer` NULL or writable.
+enum CorayStatus coray_bvh_tracer(const struct CorayBvh *bvh,
+                                  void *stack,
+                                  size_t stack_bytes,
+                                  struct CorayTracer *tracer);
+
+// The closest hit of `ray` by a tracer of this hierarchy (made by
+// `coray_bvh_tracer`), into `hit`: `coray_bvh_intersect1`'s answer, with
+// the checks made once when the tracer was made. Each call checks the
+// tracer (made by that call, not moved or copied since; of this family),
+// its handle's seal word, `ray` and `hit` (non-null, aligned, apart, and
+// `hit` over none of the tracer, its stack, handle, arena or scene, nor
+// the ray over the tracer or stack), and adds its statistics to the
+// tracer's (`coray_tracer_stats`). Since 1.5.
+//
+// Safety: `tracer` NULL or a tracer its make call filled, used by one
+// thread at a time, whose handle, arena, scene and stack are in place and
+// (but the stack) unchanged; `ray` NULL or readable; `hit` NULL or
+// writable.
+enum CorayStatus coray_bvh_tracer_intersect1(struct CorayTracer *tracer,
+                                             const struct CorayRay *ray,
+                                             struct CorayHit *hit);
+
+// Whether something lies on `ray` within `[tnear, tfar]` (1) or not (0),
+// by a tracer of this hierarchy, into `occluded`: `coray_bvh_occluded1`'s
+// answer. Otherwise as `coray_bvh_tracer_intersect1`. Since 1.5.
+//
+// Safety: as `coray_bvh_tracer_intersect1`, with `occluded` one writable
+// byte.
+enum CorayStatus coray_bvh_tracer_occluded1(struct CorayTracer *tracer,
+                                            const struct CorayRay *ray,
+                                            uint8_t *occluded);
 
 // A camera at (0, 0, 1) looking at the origin, y up, 45 degrees, 64 x 64
 // pixels, `struct_size` set.
@@ -1016,7 +1069,9 @@ enum CorayStatus coray_kdtree_intersect(const struct CorayKdTree *tree,
                                         size_t stack_bytes,
                                         struct CorayTraceStats *stats);
 
-// `coray_kdtree_intersect` for one ray.
+// `coray_kdtree_intersect` for one ray, checked in full on every call. A thread
+// tracing one ray per call makes a tracer (`coray_kdtree_tracer`) and calls
+// `coray_kdtree_tracer_intersect1`: the same answer, the checks made once.
 //
 // Safety: as `coray_kdtree_intersect` with `count` 1.
 enum CorayStatus coray_kdtree_intersect1(const struct CorayKdTree *tree,
@@ -1041,7 +1096,9 @@ enum CorayStatus coray_kdtree_occluded(const struct CorayKdTree *tree,
                                        size_t stack_bytes,
                                        struct CorayTraceStats *stats);
 
-// `coray_kdtree_occluded` for one ray.
+// `coray_kdtree_occluded` for one ray, checked in full on every call. A thread
+// tracing one ray per call makes a tracer (`coray_kdtree_tracer`) and calls
+// `coray_kdtree_tracer_occluded1`: the same answer, the checks made once.
 //
 // Safety: as `coray_kdtree_occluded` with `count` 1.
 enum CorayStatus coray_kdtree_occluded1(const struct CorayKdTree *tree,
@@ -1051,6 +1108,47 @@ enum CorayStatus coray_kdtree_occluded1(const struct CorayKdTree *tree,
                                         void *stack,
                                         size_t stack_bytes,
                                         struct CorayTraceStats *stats);
+
+// Makes `tracer` trace `tree` by `traversal` with the caller's `stack`
+// (`CORAY_KDTREE_STACK_BYTES`, 16-byte aligned): one thread's
+// `coray_kdtree_tracer_intersect1` and `_occluded1` calls then skip the checks
+// this call makes. Since 1.5.
+//
+// Safety: `tree` as in `coray_kdtree_info`; `stack` NULL or writable for
+// `stack_bytes`, and used by nothing else while the tracer is; `tracer`
+// NULL or writable.
+enum CorayStatus coray_kdtree_tracer(const struct CorayKdTree *tree,
+                                     CorayTraversal traversal,
+                                     void *stack,
+                                     size_t stack_bytes,
+                                     struct CorayTracer *tracer);
+
+// The closest hit of `ray` by a tracer of this kd-tree (made by
+// `coray_kdtree_tracer`), into `hit`: `coray_kdtree_intersect1`'s answer, with
+// the checks made once when the tracer was made. Each call checks the
+// tracer (made by that call, not moved or copied since; of this family),
+// its handle's seal word, `ray` and `hit` (non-null, aligned, apart, and
+// `hit` over none of the tracer, its stack, handle, arena or scene, nor
+// the ray over the tracer or stack), and adds its statistics to the
+// tracer's (`coray_tracer_stats`). Since 1.5.
+//
+// Safety: `tracer` NULL or a tracer its make call filled, used by one
+// thread at a time, whose handle, arena, scene and stack are in place and
+// (but the stack) unchanged; `ray` NULL or readable; `hit` NULL or
+// writable.
+enum CorayStatus coray_kdtree_tracer_intersect1(struct CorayTracer *tracer,
+                                                const struct CorayRay *ray,
+                                                struct CorayHit *hit);
+
+// Whether something lies on `ray` within `[tnear, tfar]` (1) or not (0),
+// by a tracer of this kd-tree, into `occluded`: `coray_kdtree_occluded1`'s
+// answer. Otherwise as `coray_kdtree_tracer_intersect1`. Since 1.5.
+//
+// Safety: as `coray_kdtree_tracer_intersect1`, with `occluded` one writable
+// byte.
+enum CorayStatus coray_kdtree_tracer_occluded1(struct CorayTracer *tracer,
+                                               const struct CorayRay *ray,
+                                               uint8_t *occluded);
 
 // The image plane of `camera` (a camera as `coray_kdtree_cast_image` takes it).
 //
@@ -1167,7 +1265,9 @@ enum CorayStatus coray_proj_intersect(const struct CorayProj *proj,
                                       size_t stack_bytes,
                                       struct CorayTraceStats *stats);
 
-// `coray_proj_intersect` for one ray.
+// `coray_proj_intersect` for one ray, checked in full on every call. A thread
+// tracing one ray per call makes a tracer (`coray_proj_tracer`) and calls
+// `coray_proj_tracer_intersect1`: the same answer, the checks made once.
 //
 // Safety: as `coray_proj_intersect` with `count` 1.
 enum CorayStatus coray_proj_intersect1(const struct CorayProj *proj,
@@ -1192,7 +1292,9 @@ enum CorayStatus coray_proj_occluded(const struct CorayProj *proj,
                                      size_t stack_bytes,
                                      struct CorayTraceStats *stats);
 
-// `coray_proj_occluded` for one ray.
+// `coray_proj_occluded` for one ray, checked in full on every call. A thread
+// tracing one ray per call makes a tracer (`coray_proj_tracer`) and calls
+// `coray_proj_tracer_occluded1`: the same answer, the checks made once.
 //
 // Safety: as `coray_proj_occluded` with `count` 1.
 enum CorayStatus coray_proj_occluded1(const struct CorayProj *proj,
@@ -1202,6 +1304,56 @@ enum CorayStatus coray_proj_occluded1(const struct CorayProj *proj,
                                       void *stack,
                                       size_t stack_bytes,
                                       struct CorayTraceStats *stats);
+
+// Makes `tracer` trace `proj` by `scheme` with the caller's `stack` (at
+// least the info's `stack_bytes`, 16-byte aligned): one thread's
+// `coray_proj_tracer_intersect1` and `_occluded1` calls then skip the checks
+// this call makes; each ray must lie on a line through the plane's eye,
+// as for `coray_proj_intersect1`. Since 1.5.
+//
+// Safety: `proj` as in `coray_proj_info`; `stack` NULL or writable for
+// `stack_bytes`, and used by nothing else while the tracer is; `tracer`
+// NULL or writable.
+enum CorayStatus coray_proj_tracer(const struct CorayProj *proj,
+                                   CorayProjScheme scheme_id,
+                                   void *stack,
+                                   size_t stack_bytes,
+                                   struct CorayTracer *tracer);
+
+// The closest hit of `ray` by a tracer of this projection hierarchy (made by
+// `coray_proj_tracer`), into `hit`: `coray_proj_intersect1`'s answer, with
+// the checks made once when the tracer was made. Each call checks the
+// tracer (made by that call, not moved or copied since; of this family),
+// its handle's seal word, `ray` and `hit` (non-null, aligned, apart, and
+// `hit` over none of the tracer, its stack, handle, arena or scene, nor
+// the ray over the tracer or stack), and adds its statistics to the
+// tracer's (`coray_tracer_stats`). Since 1.5.
+//
+// Safety: `tracer` NULL or a tracer its make call filled, used by one
+// thread at a time, whose handle, arena, scene and stack are in place and
+// (but the stack) unchanged; `ray` NULL or readable; `hit` NULL or
+// writable.
+enum CorayStatus coray_proj_tracer_intersect1(struct CorayTracer *tracer,
+                                              const struct CorayRay *ray,
+                                              struct CorayHit *hit);
+
+// Whether something lies on `ray` within `[tnear, tfar]` (1) or not (0),
+// by a tracer of this projection hierarchy, into `occluded`: `coray_proj_occluded1`'s
+// answer. Otherwise as `coray_proj_tracer_intersect1`. Since 1.5.
+//
+// Safety: as `coray_proj_tracer_intersect1`, with `occluded` one writable
+// byte.
+enum CorayStatus coray_proj_tracer_occluded1(struct CorayTracer *tracer,
+                                             const struct CorayRay *ray,
+                                             uint8_t *occluded);
+
+// The statistics of every successful call on `tracer` since it was made,
+// summed, into `stats` (its `struct_size` set). Since 1.5.
+//
+// Safety: `tracer` NULL or readable; `stats` NULL or writable for its
+// `struct_size`.
+enum CorayStatus coray_tracer_stats(const struct CorayTracer *tracer,
+                                    struct CorayTraceStats *stats);
 
 // Default parameters (leaves of up to 4) with `struct_size` set.
 struct CorayWideParams coray_wide_params_default(void);
@@ -1288,7 +1440,9 @@ enum CorayStatus coray_wide_intersect(const struct CorayWide *wide,
                                       size_t stack_bytes,
                                       struct CorayTraceStats *stats);
 
-// `coray_wide_intersect` for one ray.
+// `coray_wide_intersect` for one ray, checked in full on every call. A thread
+// tracing one ray per call makes a tracer (`coray_wide_tracer`) and calls
+// `coray_wide_tracer_intersect1`: the same answer, the checks made once.
 //
 // Safety: as `coray_wide_intersect` with `count` 1.
 enum CorayStatus coray_wide_intersect1(const struct CorayWide *wide,
@@ -1311,7 +1465,9 @@ enum CorayStatus coray_wide_occluded(const struct CorayWide *wide,
                                      size_t stack_bytes,
                                      struct CorayTraceStats *stats);
 
-// `coray_wide_occluded` for one ray.
+// `coray_wide_occluded` for one ray, checked in full on every call. A thread
+// tracing one ray per call makes a tracer (`coray_wide_tracer`) and calls
+// `coray_wide_tracer_occluded1`: the same answer, the checks made once.
 //
 // Safety: as `coray_wide_occluded` with `count` 1.
 enum CorayStatus coray_wide_occluded1(const struct CorayWide *wide,
@@ -1320,6 +1476,46 @@ enum CorayStatus coray_wide_occluded1(const struct CorayWide *wide,
                                       void *stack,
                                       size_t stack_bytes,
                                       struct CorayTraceStats *stats);
+
+// Makes `tracer` trace `wide` with the caller's `stack` (at least the
+// info's `stack_bytes`, 16-byte aligned): one thread's
+// `coray_wide_tracer_intersect1` and `_occluded1` calls then skip the checks
+// this call makes. Since 1.5.
+//
+// Safety: `wide` as in `coray_wide_info`; `stack` NULL or writable
+// for `stack_bytes`, and used by nothing else while the tracer is;
+// `tracer` NULL or writable.
+enum CorayStatus coray_wide_tracer(const struct CorayWide *wide,
+                                   void *stack,
+                                   size_t stack_bytes,
+                                   struct CorayTracer *tracer);
+
+// The closest hit of `ray` by a tracer of this wide hierarchy (made by
+// `coray_wide_tracer`), into `hit`: `coray_wide_intersect1`'s answer, with
+// the checks made once when the tracer was made. Each call checks the
+// tracer (made by that call, not moved or copied since; of this family),
+// its handle's seal word, `ray` and `hit` (non-null, aligned, apart, and
+// `hit` over none of the tracer, its stack, handle, arena or scene, nor
+// the ray over the tracer or stack), and adds its statistics to the
+// tracer's (`coray_tracer_stats`). Since 1.5.
+//
+// Safety: `tracer` NULL or a tracer its make call filled, used by one
+// thread at a time, whose handle, arena, scene and stack are in place and
+// (but the stack) unchanged; `ray` NULL or readable; `hit` NULL or
+// writable.
+enum CorayStatus coray_wide_tracer_intersect1(struct CorayTracer *tracer,
+                                              const struct CorayRay *ray,
+                                              struct CorayHit *hit);
+
+// Whether something lies on `ray` within `[tnear, tfar]` (1) or not (0),
+// by a tracer of this wide hierarchy, into `occluded`: `coray_wide_occluded1`'s
+// answer. Otherwise as `coray_wide_tracer_intersect1`. Since 1.5.
+//
+// Safety: as `coray_wide_tracer_intersect1`, with `occluded` one writable
+// byte.
+enum CorayStatus coray_wide_tracer_occluded1(struct CorayTracer *tracer,
+                                             const struct CorayRay *ray,
+                                             uint8_t *occluded);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -14,7 +14,7 @@ use std::time::Instant;
 
 enum Inner<'s> {
     Kd(OwnedKd, Traversal),
-    KdC(coray_ffi::through_c::CKdTree<'s>, bool),
+    KdC(coray_ffi::through_c::CKdTree<'s>, crate::method::CCalls),
     Bvh(OwnedBvh),
     Wide(OwnedWide),
     Proj(Box<ProjRig<'s>>),
@@ -93,7 +93,7 @@ impl<'s> Built<'s> {
                 b.truncated = o.info().truncated();
                 b.inner = Inner::Kd(o, traversal);
             }
-            Method::KdC { per_ray } => {
+            Method::KdC { calls } => {
                 let p = match preset {
                     Preset::Auto => coray_ffi::CORAY_KD_PRESET_AUTO,
                     Preset::Paper => coray_ffi::CORAY_KD_PRESET_PAPER,
@@ -107,7 +107,7 @@ impl<'s> Built<'s> {
                 .map_err(|s| format!("{method} build: {}", coray_ffi::status_description(s as i32).to_string_lossy()))?;
                 b.build_ms = ms(t);
                 b.bytes = Some(tree.arena_bytes());
-                b.inner = Inner::KdC(tree, per_ray);
+                b.inner = Inner::KdC(tree, calls);
             }
             Method::Cast { .. } => {
                 return Err(format!(
@@ -163,9 +163,9 @@ impl<'s> Built<'s> {
                 method: *traversal,
                 bounds: self.bounds,
             }),
-            Inner::KdC(tree, per_ray) => v.visit(&crate::shoot::KdCShooter {
+            Inner::KdC(tree, calls) => v.visit(&crate::shoot::KdCShooter {
                 tree,
-                per_ray: *per_ray,
+                calls: *calls,
                 bounds: self.bounds,
             }),
             Inner::Bvh(o) => v.visit(&AccelShooter {

@@ -92,6 +92,21 @@ pub struct ProjMethod {
     pub builder_name: &'static str,
 }
 
+/// How a kd-tree traced through the C ABI gets its rays.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CCalls {
+    /// One `coray_kdtree_intersect` / `_occluded` call per chunk of rays
+    /// (`kd-c`).
+    Arrays,
+    /// One `coray_kdtree_tracer_intersect1` / `_occluded1` call per ray on a
+    /// tracer per thread (`kd-c1`): what a renderer tracing one ray at a
+    /// time should call.
+    Tracer,
+    /// One `coray_kdtree_intersect1` / `_occluded1` call per ray with the
+    /// handle and stack, checked in full on every call (`kd-c1-handle`).
+    Handle,
+}
+
 /// One way of tracing rays that the command can build and time.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Method {
@@ -106,9 +121,8 @@ pub enum Method {
     /// A kd-tree built, opened and traced through the C ABI with the
     /// command's preset, hierarchically: what a C caller pays per call.
     KdC {
-        /// One `coray_kdtree_intersect1` / `_occluded1` call per ray
-        /// (`kd-c1`), else one array call per chunk of rays (`kd-c`).
-        per_ray: bool,
+        /// How the rays are handed over.
+        calls: CCalls,
     },
     /// A kd-tree casting the camera's image by an LCTS scheme.
     Cast {
@@ -227,7 +241,7 @@ impl Method {
     pub fn help() -> String {
         let names: Vec<String> = Method::all().iter().map(|m| m.to_string()).collect();
         format!(
-            "{}, kd-paper, kd-paper-rope, kd-paper-packet, kd-c, kd-c1, slcts1d:N, slcts2d:NxM, wide:N, \
+            "{}, kd-paper, kd-paper-rope, kd-paper-packet, kd-c, kd-c1, kd-c1-handle, slcts1d:N, slcts2d:NxM, wide:N, \
              and proj-BUILDER-CRITERIA-SCHEME (BUILDER {}, CRITERIA 2d|dummy, SCHEME 2d|3d|comb)",
             names.join(", "),
             PROJ_BUILDERS.join("|")
@@ -252,8 +266,21 @@ impl Method {
             "kd-packet" => return kd(None, Traversal::Packets),
             "kd-paper-packet" => return kd(Some(Preset::Paper), Traversal::Packets),
             "kd-auto-packet" => return kd(Some(Preset::Auto), Traversal::Packets),
-            "kd-c" => return Some(Method::KdC { per_ray: false }),
-            "kd-c1" => return Some(Method::KdC { per_ray: true }),
+            "kd-c" => {
+                return Some(Method::KdC {
+                    calls: CCalls::Arrays,
+                })
+            }
+            "kd-c1" => {
+                return Some(Method::KdC {
+                    calls: CCalls::Tracer,
+                })
+            }
+            "kd-c1-handle" => {
+                return Some(Method::KdC {
+                    calls: CCalls::Handle,
+                })
+            }
             "slcts1d" => return cast(Scheme::Slcts1d { n: 5 }),
             "slcts2d" => return cast(Scheme::Slcts2d { n: 5, m: 5 }),
             "hlcts1d" => return cast(Scheme::Hlcts1d),
@@ -348,8 +375,15 @@ impl fmt::Display for Method {
                 };
                 write!(f, "kd{p}{t}")
             }
-            Method::KdC { per_ray: false } => f.write_str("kd-c"),
-            Method::KdC { per_ray: true } => f.write_str("kd-c1"),
+            Method::KdC {
+                calls: CCalls::Arrays,
+            } => f.write_str("kd-c"),
+            Method::KdC {
+                calls: CCalls::Tracer,
+            } => f.write_str("kd-c1"),
+            Method::KdC {
+                calls: CCalls::Handle,
+            } => f.write_str("kd-c1-handle"),
             Method::Cast { scheme } => match scheme {
                 Scheme::Slcts1d { n: 5 } => f.write_str("slcts1d"),
                 Scheme::Slcts1d { n } => write!(f, "slcts1d:{n}"),

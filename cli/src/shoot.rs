@@ -4,6 +4,7 @@
 //! Embree are the two others. The structure, and its traversal, is chosen
 //! once: each kind gets its own monomorphised loops.
 
+use crate::method::CCalls;
 use coray::{Aabb, Accel, Hit, Ray, TraceStats};
 
 /// A structure rays are shot through, with the per-thread state its
@@ -184,28 +185,45 @@ impl Shooter for KdPacketShooter<'_> {
     }
 }
 
-/// A kd-tree traced through the C ABI: one call per ray, or one array
-/// call per chunk of rays (the harness's chunks). Statistics stay 0: the
-/// calls get NULL for them, as a renderer's would.
+/// A kd-tree traced through the C ABI: one call per ray (on a tracer per
+/// thread, or with the handle and stack), or one array call per chunk of
+/// rays (the harness's chunks). Statistics stay 0: the calls get NULL for
+/// them, as a renderer's would.
 pub struct KdCShooter<'a, 's> {
     /// The opened tree.
     pub tree: &'a coray_ffi::through_c::CKdTree<'s>,
-    /// `coray_kdtree_intersect1` per ray, else array calls.
-    pub per_ray: bool,
+    /// How the rays are handed over.
+    pub calls: CCalls,
     /// Its scene's box.
     pub bounds: Aabb,
 }
 
-impl Shooter for KdCShooter<'_, '_> {
-    /// The traversal stack and the any-hit answers as bytes.
-    type Ctx = (coray_ffi::through_c::CStack, Vec<u8>);
+/// One thread's state for [`KdCShooter`]: a traversal stack, the any-hit
+/// answers as bytes, and the thread's tracer (for `kd-c1`).
+pub struct KdCCtx<'a> {
+    stack: coray_ffi::through_c::CStack,
+    bytes: Vec<u8>,
+    tracer: Option<coray_ffi::through_c::CTracer<'a>>,
+}
+
+impl<'a> Shooter for KdCShooter<'a, '_> {
+    type Ctx = KdCCtx<'a>;
 
     fn ctx(&self) -> Self::Ctx {
-        Default::default()
+        let tree: &'a coray_ffi::through_c::CKdTree = self.tree;
+        KdCCtx {
+            stack: Default::default(),
+            bytes: Vec::new(),
+            tracer: (self.calls == CCalls::Tracer).then(|| tree.tracer().expect("valid tracer")),
+        }
     }
 
     fn intersect(&self, ray: &Ray, ctx: &mut Self::Ctx, _: &mut TraceStats) -> Hit {
-        self.tree.intersect1(ray, &mut ctx.0).expect("valid call")
+        match &mut ctx.tracer {
+            Some(t) => t.intersect1(ray),
+            None => self.tree.intersect1(ray, &mut ctx.stack),
+        }
+        .expect("valid call")
     }
 
     fn occluded(
@@ -215,7 +233,11 @@ impl Shooter for KdCShooter<'_, '_> {
         ctx: &mut Self::Ctx,
         _: &mut TraceStats,
     ) -> bool {
-        self.tree.occluded1(ray, &mut ctx.0).expect("valid call")
+        match &mut ctx.tracer {
+            Some(t) => t.occluded1(ray),
+            None => self.tree.occluded1(ray, &mut ctx.stack),
+        }
+        .expect("valid call")
     }
 
     fn intersect_all(
@@ -225,14 +247,14 @@ impl Shooter for KdCShooter<'_, '_> {
         ctx: &mut Self::Ctx,
         st: &mut TraceStats,
     ) {
-        if self.per_ray {
+        if self.calls == CCalls::Arrays {
+            self.tree
+                .intersect(rays, out, &mut ctx.stack)
+                .expect("valid call");
+        } else {
             for (r, h) in rays.iter().zip(out.iter_mut()) {
                 *h = self.intersect(r, ctx, st);
             }
-        } else {
-            self.tree
-                .intersect(rays, out, &mut ctx.0)
-                .expect("valid call");
         }
     }
 
@@ -244,17 +266,17 @@ impl Shooter for KdCShooter<'_, '_> {
         ctx: &mut Self::Ctx,
         st: &mut TraceStats,
     ) {
-        if self.per_ray {
-            for (r, o) in rays.iter().zip(out.iter_mut()) {
-                *o = self.occluded(r, None, ctx, st);
+        if self.calls == CCalls::Arrays {
+            ctx.bytes.resize(rays.len(), 0);
+            self.tree
+                .occluded(rays, &mut ctx.bytes, &mut ctx.stack)
+                .expect("valid call");
+            for (o, b) in out.iter_mut().zip(&ctx.bytes) {
+                *o = *b != 0;
             }
         } else {
-            ctx.1.resize(rays.len(), 0);
-            self.tree
-                .occluded(rays, &mut ctx.1, &mut ctx.0)
-                .expect("valid call");
-            for (o, b) in out.iter_mut().zip(&ctx.1) {
-                *o = *b != 0;
+            for (r, o) in rays.iter().zip(out.iter_mut()) {
+                *o = self.occluded(r, None, ctx, st);
             }
         }
     }

@@ -107,6 +107,23 @@ impl Span {
         }
     }
 
+    /// The widest range around `[p, p + bytes)` that meets none of
+    /// `spans`, as `(lo, hi)`: `lo` at least 1, so that a place inside it
+    /// is never NULL. `[p, p + bytes)` must meet none of them.
+    #[inline]
+    pub(crate) fn gap_around(p: usize, bytes: usize, spans: &[Span]) -> (usize, usize) {
+        let (mut lo, mut hi) = (1usize, usize::MAX);
+        for s in spans.iter().filter(|s| s.end > s.start) {
+            debug_assert!(s.end <= p || s.start >= p.saturating_add(bytes));
+            if s.end <= p {
+                lo = lo.max(s.end);
+            } else {
+                hi = hi.min(s.start);
+            }
+        }
+        (lo, hi)
+    }
+
     /// The four arrays of `s`.
     #[inline(always)]
     pub(crate) fn of_scene(s: &coray::Scene) -> [Span; 4] {

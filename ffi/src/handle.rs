@@ -180,6 +180,24 @@ impl<'h> Sealed<'h> {
         Ok(Sealed { w })
     }
 
+    /// The words `w` without checking their seal again: for a one-ray call
+    /// whose memo records that these words, at this address and with this
+    /// seal word, passed [`Sealed::new`] for the memo's kind.
+    ///
+    /// # Safety
+    /// `w` passed `Sealed::new` for this kind, and the caller's contract
+    /// (a handle stays unchanged while it is used) holds since.
+    #[inline(always)]
+    pub(crate) unsafe fn known(w: &'h [u64; WORDS]) -> Sealed<'h> {
+        Sealed { w }
+    }
+
+    /// The seal word, which changes with any word it covers.
+    #[inline(always)]
+    pub(crate) fn seal(&self) -> u64 {
+        self.w[0]
+    }
+
     /// The arena's address.
     #[inline]
     pub(crate) fn arena(&self) -> usize {

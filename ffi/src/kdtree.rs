@@ -6,6 +6,7 @@ use crate::abi::*;
 use crate::carve::{self, check_arena, Out, OutValue, Regions, Versioned};
 use crate::handle::{self, Handle, Sealed, KIND_KD};
 use crate::one_ray::one_ray;
+use crate::tracer::{self, CorayTracer};
 use crate::{guard, CorayKdRunJobs, CorayKdTree, CorayStatus};
 use coray::kd::layout::{KdArenaHeader, KdArenaLayout, KdScratchLayout, KD_HEADER_BYTES};
 use coray::kd::{
@@ -459,6 +460,26 @@ unsafe fn tree_of<'a>(h: Sealed, scene: coray::Scene<'a>) -> Result<KdTree<'a>, 
     }
 }
 
+/// The tree a handle describes whose header and parts passed [`tree_of`]'s
+/// checks when a tracer was made: nothing is checked again.
+///
+/// Safety: as [`tree_of`].
+#[inline(always)]
+unsafe fn known_tree_of<'a>(h: Sealed, scene: coray::Scene<'a>) -> KdTree<'a> {
+    // SAFETY: as in tree_of.
+    unsafe {
+        let header = &h.part::<KdArenaHeader>(0)[0];
+        KdTree::from_checked_parts(
+            scene,
+            &header.info,
+            h.part::<KdNode>(1),
+            h.part::<KdRopes>(2),
+            h.part::<u32>(3),
+            h.part::<u32>(4),
+        )
+    }
+}
+
 /// The tree behind a caller's handle, its buffers noted in `regions`.
 ///
 /// Safety: `t` is NULL or a handle `coray_kdtree_open` filled, whose arena
@@ -758,7 +779,9 @@ pub unsafe extern "C" fn coray_kdtree_intersect(
     }
 }
 
-/// `coray_kdtree_intersect` for one ray.
+/// `coray_kdtree_intersect` for one ray, checked in full on every call. A thread
+/// tracing one ray per call makes a tracer (`coray_kdtree_tracer`) and calls
+/// `coray_kdtree_tracer_intersect1`: the same answer, the checks made once.
 ///
 /// Safety: as `coray_kdtree_intersect` with `count` 1.
 #[no_mangle]
@@ -818,7 +841,9 @@ pub unsafe extern "C" fn coray_kdtree_occluded(
     }
 }
 
-/// `coray_kdtree_occluded` for one ray.
+/// `coray_kdtree_occluded` for one ray, checked in full on every call. A thread
+/// tracing one ray per call makes a tracer (`coray_kdtree_tracer`) and calls
+/// `coray_kdtree_tracer_occluded1`: the same answer, the checks made once.
 ///
 /// Safety: as `coray_kdtree_occluded` with `count` 1.
 #[no_mangle]
@@ -844,4 +869,115 @@ pub unsafe extern "C" fn coray_kdtree_occluded1(
             |t, r, m, s, st| KdTree::occluded(t, r, m, s, st) as u8,
         )
     }
+}
+
+/// Makes `tracer` trace `tree` by `traversal` with the caller's `stack`
+/// (`CORAY_KDTREE_STACK_BYTES`, 16-byte aligned): one thread's
+/// `coray_kdtree_tracer_intersect1` and `_occluded1` calls then skip the checks
+/// this call makes. Since 1.5.
+///
+/// Safety: `tree` as in `coray_kdtree_info`; `stack` NULL or writable for
+/// `stack_bytes`, and used by nothing else while the tracer is; `tracer`
+/// NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn coray_kdtree_tracer(
+    tree: *const CorayKdTree,
+    traversal: CorayTraversal,
+    stack: *mut c_void,
+    stack_bytes: usize,
+    tracer: *mut CorayTracer,
+) -> CorayStatus {
+    guard(|| {
+        self::traversal(traversal)?;
+        // SAFETY: forwarded caller contract.
+        unsafe {
+            tracer::make::<_, KdStackItem>(
+                tracer,
+                tree.cast(),
+                KIND_KD,
+                traversal as u64,
+                |h, s| tree_of(h, s),
+                |_| KD_STACK_LEN,
+                stack,
+                stack_bytes,
+            )
+        }
+    })
+}
+
+/// The closest hit of `ray` by a tracer of this kd-tree (made by
+/// `coray_kdtree_tracer`), into `hit`: `coray_kdtree_intersect1`'s answer, with
+/// the checks made once when the tracer was made. Each call checks the
+/// tracer (made by that call, not moved or copied since; of this family),
+/// its handle's seal word, `ray` and `hit` (non-null, aligned, apart, and
+/// `hit` over none of the tracer, its stack, handle, arena or scene, nor
+/// the ray over the tracer or stack), and adds its statistics to the
+/// tracer's (`coray_tracer_stats`). Since 1.5.
+///
+/// Safety: `tracer` NULL or a tracer its make call filled, used by one
+/// thread at a time, whose handle, arena, scene and stack are in place and
+/// (but the stack) unchanged; `ray` NULL or readable; `hit` NULL or
+/// writable.
+#[no_mangle]
+pub unsafe extern "C" fn coray_kdtree_tracer_intersect1(
+    tracer: *mut CorayTracer,
+    ray: *const CorayRay,
+    hit: *mut CorayHit,
+) -> CorayStatus {
+    guard(|| {
+        // SAFETY: forwarded caller contract.
+        unsafe {
+            let binding = tracer::binding(tracer, Some(KIND_KD))?;
+            tracer::trace(
+                tracer,
+                binding,
+                #[inline(always)]
+                |h, s| Ok(known_tree_of(h, s)),
+                #[inline(always)]
+                |_| KD_STACK_LEN,
+                ray,
+                hit,
+                #[inline(always)]
+                |t, m, r, s: &mut [KdStackItem], st| {
+                    let m = traversal(m as CorayTraversal)?;
+                    Ok(CorayHit::from(KdTree::intersect(t, r, m, s, st)))
+                },
+            )
+        }
+    })
+}
+
+/// Whether something lies on `ray` within `[tnear, tfar]` (1) or not (0),
+/// by a tracer of this kd-tree, into `occluded`: `coray_kdtree_occluded1`'s
+/// answer. Otherwise as `coray_kdtree_tracer_intersect1`. Since 1.5.
+///
+/// Safety: as `coray_kdtree_tracer_intersect1`, with `occluded` one writable
+/// byte.
+#[no_mangle]
+pub unsafe extern "C" fn coray_kdtree_tracer_occluded1(
+    tracer: *mut CorayTracer,
+    ray: *const CorayRay,
+    occluded: *mut u8,
+) -> CorayStatus {
+    guard(|| {
+        // SAFETY: forwarded caller contract.
+        unsafe {
+            let binding = tracer::binding(tracer, Some(KIND_KD))?;
+            tracer::trace(
+                tracer,
+                binding,
+                #[inline(always)]
+                |h, s| Ok(known_tree_of(h, s)),
+                #[inline(always)]
+                |_| KD_STACK_LEN,
+                ray,
+                occluded,
+                #[inline(always)]
+                |t, m, r, s: &mut [KdStackItem], st| {
+                    let m = traversal(m as CorayTraversal)?;
+                    Ok(KdTree::occluded(t, r, m, s, st) as u8)
+                },
+            )
+        }
+    })
 }

@@ -34,6 +34,7 @@ pub mod saved;
 pub mod simd;
 #[cfg(feature = "std")]
 pub mod through_c;
+mod tracer;
 mod wide;
 
 pub use abi::*;
@@ -43,12 +44,13 @@ pub use cast::*;
 pub use handle::{CorayBvh, CorayKdTree, CorayProj, CorayWide};
 pub use kdtree::*;
 pub use proj::*;
+pub use tracer::*;
 pub use wide::*;
 
 /// Major version of the C ABI: changes only with an incompatible change.
 pub const CORAY_VERSION_MAJOR: u32 = 1;
 /// Minor version: new functions or struct fields, compatible.
-pub const CORAY_VERSION_MINOR: u32 = 4;
+pub const CORAY_VERSION_MINOR: u32 = 5;
 /// Patch version: fixes only.
 pub const CORAY_VERSION_PATCH: u32 = 0;
 
@@ -175,6 +177,6 @@ mod tests {
             super::CORAY_VERSION_PATCH
         );
         assert_eq!(v, want);
-        assert_eq!(super::coray_version(), 1 << 16 | 4 << 8);
+        assert_eq!(super::coray_version(), 1 << 16 | 5 << 8);
     }
 }

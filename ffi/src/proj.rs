@@ -9,6 +9,7 @@ use crate::carve::{self, check_arena, Out, OutValue, Regions, Versioned};
 use crate::cast::{camera, CorayCamera};
 use crate::handle::{self, Handle, Sealed, KIND_PROJ};
 use crate::one_ray::one_ray;
+use crate::tracer::{self, Binding, CorayTracer};
 use crate::{guard, CorayProj, CorayStatus};
 use coray::bvh::layout::code;
 use coray::bvh::{Bvh, BvhNode, BvhScratch, BvhStackItem};
@@ -826,7 +827,9 @@ pub unsafe extern "C" fn coray_proj_intersect(
     }
 }
 
-/// `coray_proj_intersect` for one ray.
+/// `coray_proj_intersect` for one ray, checked in full on every call. A thread
+/// tracing one ray per call makes a tracer (`coray_proj_tracer`) and calls
+/// `coray_proj_tracer_intersect1`: the same answer, the checks made once.
 ///
 /// Safety: as `coray_proj_intersect` with `count` 1.
 #[no_mangle]
@@ -889,7 +892,9 @@ pub unsafe extern "C" fn coray_proj_occluded(
     }
 }
 
-/// `coray_proj_occluded` for one ray.
+/// `coray_proj_occluded` for one ray, checked in full on every call. A thread
+/// tracing one ray per call makes a tracer (`coray_proj_tracer`) and calls
+/// `coray_proj_tracer_occluded1`: the same answer, the checks made once.
 ///
 /// Safety: as `coray_proj_occluded` with `count` 1.
 #[no_mangle]
@@ -918,4 +923,135 @@ pub unsafe extern "C" fn coray_proj_occluded1(
             |p, r, sc, s, st| p.occluded(r, sc, s, st).map(u8::from),
         )
     }
+}
+
+/// Makes `tracer` trace `proj` by `scheme` with the caller's `stack` (at
+/// least the info's `stack_bytes`, 16-byte aligned): one thread's
+/// `coray_proj_tracer_intersect1` and `_occluded1` calls then skip the checks
+/// this call makes; each ray must lie on a line through the plane's eye,
+/// as for `coray_proj_intersect1`. Since 1.5.
+///
+/// Safety: `proj` as in `coray_proj_info`; `stack` NULL or writable for
+/// `stack_bytes`, and used by nothing else while the tracer is; `tracer`
+/// NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn coray_proj_tracer(
+    proj: *const CorayProj,
+    scheme_id: CorayProjScheme,
+    stack: *mut c_void,
+    stack_bytes: usize,
+    tracer: *mut CorayTracer,
+) -> CorayStatus {
+    guard(|| {
+        scheme(scheme_id)?;
+        // SAFETY: forwarded caller contract.
+        unsafe {
+            tracer::make::<_, BvhStackItem>(
+                tracer,
+                proj.cast(),
+                KIND_PROJ,
+                scheme_id as u64,
+                |h, s| Ok(view_of(h, s)?.1),
+                |p| p.stack_len(),
+                stack,
+                stack_bytes,
+            )
+        }
+    })
+}
+
+/// `coray_proj_tracer_intersect1` and `_occluded1` on a projection
+/// hierarchy's tracer: `answer` for the ray, which must lie on a line
+/// through the plane's eye.
+///
+/// Safety: as `coray_proj_tracer_intersect1`, with `out` one writable `O`.
+#[inline(always)]
+unsafe fn traced<O>(
+    tracer: *mut CorayTracer,
+    binding: Binding,
+    ray: *const CorayRay,
+    out: *mut O,
+    answer: impl FnOnce(
+        &ProjHierarchy,
+        &Ray,
+        ProjScheme,
+        &mut [BvhStackItem],
+        &mut TraceStats,
+    ) -> Option<O>,
+) -> Result<(), CorayStatus> {
+    // SAFETY: forwarded caller contract.
+    unsafe {
+        tracer::trace(
+            tracer,
+            binding,
+            #[inline(always)]
+            |h, s| Ok(view_of(h, s)?.1),
+            #[inline(always)]
+            |p| p.stack_len(),
+            ray,
+            out,
+            #[inline(always)]
+            |p, m, r, s, st| {
+                let sc = scheme(m as CorayProjScheme)?;
+                if p.project(r).is_none() {
+                    return Err(CorayStatus::InvalidParameter);
+                }
+                // Checked above: a refusal here would be a defect.
+                answer(p, r, sc, s, st).ok_or(CorayStatus::InternalError)
+            },
+        )
+    }
+}
+
+/// The closest hit of `ray` by a tracer of this projection hierarchy (made by
+/// `coray_proj_tracer`), into `hit`: `coray_proj_intersect1`'s answer, with
+/// the checks made once when the tracer was made. Each call checks the
+/// tracer (made by that call, not moved or copied since; of this family),
+/// its handle's seal word, `ray` and `hit` (non-null, aligned, apart, and
+/// `hit` over none of the tracer, its stack, handle, arena or scene, nor
+/// the ray over the tracer or stack), and adds its statistics to the
+/// tracer's (`coray_tracer_stats`). Since 1.5.
+///
+/// Safety: `tracer` NULL or a tracer its make call filled, used by one
+/// thread at a time, whose handle, arena, scene and stack are in place and
+/// (but the stack) unchanged; `ray` NULL or readable; `hit` NULL or
+/// writable.
+#[no_mangle]
+pub unsafe extern "C" fn coray_proj_tracer_intersect1(
+    tracer: *mut CorayTracer,
+    ray: *const CorayRay,
+    hit: *mut CorayHit,
+) -> CorayStatus {
+    guard(|| {
+        // SAFETY: forwarded caller contract.
+        unsafe {
+            let binding = tracer::binding(tracer, Some(KIND_PROJ))?;
+            traced(tracer, binding, ray, hit, |p, r, sc, s, st| {
+                p.intersect(r, sc, s, st).map(Into::into)
+            })
+        }
+    })
+}
+
+/// Whether something lies on `ray` within `[tnear, tfar]` (1) or not (0),
+/// by a tracer of this projection hierarchy, into `occluded`: `coray_proj_occluded1`'s
+/// answer. Otherwise as `coray_proj_tracer_intersect1`. Since 1.5.
+///
+/// Safety: as `coray_proj_tracer_intersect1`, with `occluded` one writable
+/// byte.
+#[no_mangle]
+pub unsafe extern "C" fn coray_proj_tracer_occluded1(
+    tracer: *mut CorayTracer,
+    ray: *const CorayRay,
+    occluded: *mut u8,
+) -> CorayStatus {
+    guard(|| {
+        // SAFETY: forwarded caller contract.
+        unsafe {
+            let binding = tracer::binding(tracer, Some(KIND_PROJ))?;
+            traced(tracer, binding, ray, occluded, |p, r, sc, s, st| {
+                p.occluded(r, sc, s, st).map(u8::from)
+            })
+        }
+    })
 }

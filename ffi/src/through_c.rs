@@ -1,8 +1,10 @@
 //! A kd-tree built, opened and traced through the C entry points, for Rust
 //! code that must pay exactly what a C caller pays per call: `coray bench`
 //! times `kd-c` (one `coray_kdtree_intersect` / `_occluded` call per array
-//! of rays) against `kd-c1` (one `coray_kdtree_intersect1` / `_occluded1`
-//! call per ray) with it. Safe to use: it owns the arena and the handle and
+//! of rays) against `kd-c1` (one `coray_kdtree_tracer_intersect1` / `_occluded1`
+//! call per ray on a tracer per thread) and `kd-c1-handle` (one
+//! `coray_kdtree_intersect1` / `_occluded1` call per ray with the handle
+//! and stack) with it. Safe to use: it owns the arena and the handle and
 //! hands the entry points only pointers it made from live borrows.
 
 use crate::saved::{build_arena, c_scene};
@@ -21,6 +23,57 @@ pub struct CKdTree<'s> {
     handle: CorayKdTree,
     traversal: CorayTraversal,
     _scene: PhantomData<&'s Scene<'s>>,
+}
+
+/// One thread's tracer on a [`CKdTree`] (`coray_kdtree_tracer`) with its
+/// own stack: `coray_kdtree_tracer_intersect1` / `_occluded1` per ray. Both live
+/// on the heap, so that moving this value moves neither (a tracer's
+/// address is part of its check).
+pub struct CTracer<'t> {
+    tracer: std::boxed::Box<CorayTracer>,
+    _stack: CStack,
+    _tree: PhantomData<&'t CorayKdTree>,
+}
+
+impl CTracer<'_> {
+    /// The closest hit of `ray` by one `coray_kdtree_tracer_intersect1` call.
+    pub fn intersect1(&mut self, ray: &Ray) -> Result<Hit, CorayStatus> {
+        let mut hit = core::mem::MaybeUninit::<Hit>::uninit();
+        // SAFETY: the tracer was made on a tree borrowed for 't (its
+        // handle, arena and scene in place) with the stack owned here; Ray
+        // and CorayRay, Hit and CorayHit share their layout (abi.rs); the
+        // hit is a local, written whole when the call succeeds.
+        let s = unsafe {
+            coray_kdtree_tracer_intersect1(
+                &mut *self.tracer,
+                (ray as *const Ray).cast(),
+                hit.as_mut_ptr().cast(),
+            )
+        };
+        // SAFETY: on success the call wrote the hit.
+        status(s).map(|()| unsafe { hit.assume_init() })
+    }
+
+    /// Whether something blocks `ray`, by one `coray_kdtree_tracer_occluded1` call.
+    pub fn occluded1(&mut self, ray: &Ray) -> Result<bool, CorayStatus> {
+        let mut o = 0u8;
+        // SAFETY: as in `intersect1`, with one byte.
+        let s = unsafe {
+            coray_kdtree_tracer_occluded1(&mut *self.tracer, (ray as *const Ray).cast(), &mut o)
+        };
+        status(s).map(|()| o != 0)
+    }
+
+    /// The tracer's statistics so far (`coray_tracer_stats`).
+    pub fn stats(&self) -> Result<CorayTraceStats, CorayStatus> {
+        let mut st = CorayTraceStats {
+            struct_size: core::mem::size_of::<CorayTraceStats>(),
+            ..Default::default()
+        };
+        // SAFETY: the tracer is live; st is a local with its size set.
+        let s = unsafe { coray_tracer_stats(&*self.tracer, &mut st) };
+        status(s).map(|()| st)
+    }
 }
 
 /// One thread's traversal stack: `CORAY_KDTREE_STACK_BYTES`, 16-byte aligned.
@@ -59,6 +112,28 @@ impl<'s> CKdTree<'s> {
             traversal,
             _scene: PhantomData,
         })
+    }
+
+    /// A tracer on this tree by its traversal, with a stack of its own.
+    pub fn tracer(&self) -> Result<CTracer<'_>, CorayStatus> {
+        let mut t = CTracer {
+            tracer: std::boxed::Box::new(CorayTracer { opaque: [0; 24] }),
+            _stack: CStack::default(),
+            _tree: PhantomData,
+        };
+        // SAFETY: the handle is this tree's (its arena and scene alive for
+        // the borrow the tracer keeps); the stack is 16-byte aligned and
+        // as long as passed; the tracer is a live heap value.
+        let s = unsafe {
+            coray_kdtree_tracer(
+                &self.handle,
+                self.traversal,
+                t._stack.0.as_mut_ptr().cast(),
+                CORAY_KDTREE_STACK_BYTES,
+                &mut *t.tracer,
+            )
+        };
+        status(s).map(|()| t)
     }
 
     /// The arena's bytes.
@@ -225,6 +300,13 @@ mod tests {
                 assert_eq!(occ[i] != 0, want[i].is_hit());
                 assert_eq!(t.occluded1(r, &mut stack), Ok(want[i].is_hit()));
             }
+            let mut tr = t.tracer().expect("tracer");
+            for (i, r) in rays.iter().enumerate() {
+                let one = tr.intersect1(r).expect("tracer call");
+                assert_eq!((one.prim_id, one.t), (want[i].prim_id, want[i].t));
+                assert_eq!(tr.occluded1(r), Ok(want[i].is_hit()));
+            }
+            assert_eq!(tr.stats().expect("statistics").rays, 2 * rays.len() as u64);
         }
     }
 }

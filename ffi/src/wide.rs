@@ -8,6 +8,7 @@ use crate::bvh::{check_scene, scene_counts};
 use crate::carve::{self, check_arena, Out, OutValue, Regions, Versioned};
 use crate::handle::{self, Handle, Sealed, KIND_WIDE};
 use crate::one_ray::one_ray;
+use crate::tracer::{self, Binding, CorayTracer};
 use crate::{guard, CorayStatus, CorayWide};
 use coray::bvh::BvhNode;
 use coray::limits::MAX_PRIMS;
@@ -519,7 +520,9 @@ pub unsafe extern "C" fn coray_wide_intersect(
     }
 }
 
-/// `coray_wide_intersect` for one ray.
+/// `coray_wide_intersect` for one ray, checked in full on every call. A thread
+/// tracing one ray per call makes a tracer (`coray_wide_tracer`) and calls
+/// `coray_wide_tracer_intersect1`: the same answer, the checks made once.
 ///
 /// Safety: as `coray_wide_intersect` with `count` 1.
 #[no_mangle]
@@ -572,7 +575,9 @@ pub unsafe extern "C" fn coray_wide_occluded(
     }
 }
 
-/// `coray_wide_occluded` for one ray.
+/// `coray_wide_occluded` for one ray, checked in full on every call. A thread
+/// tracing one ray per call makes a tracer (`coray_wide_tracer`) and calls
+/// `coray_wide_tracer_occluded1`: the same answer, the checks made once.
 ///
 /// Safety: as `coray_wide_occluded` with `count` 1.
 #[no_mangle]
@@ -599,4 +604,118 @@ pub unsafe extern "C" fn coray_wide_occluded1(
             |w, r, s, st| w.occluded(r, s, st) as u8,
         )
     }
+}
+
+/// Makes `tracer` trace `wide` with the caller's `stack` (at least the
+/// info's `stack_bytes`, 16-byte aligned): one thread's
+/// `coray_wide_tracer_intersect1` and `_occluded1` calls then skip the checks
+/// this call makes. Since 1.5.
+///
+/// Safety: `wide` as in `coray_wide_info`; `stack` NULL or writable
+/// for `stack_bytes`, and used by nothing else while the tracer is;
+/// `tracer` NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn coray_wide_tracer(
+    wide: *const CorayWide,
+    stack: *mut c_void,
+    stack_bytes: usize,
+    tracer: *mut CorayTracer,
+) -> CorayStatus {
+    guard(|| {
+        // SAFETY: forwarded caller contract.
+        unsafe {
+            tracer::make::<_, WideStackItem>(
+                tracer,
+                wide.cast(),
+                KIND_WIDE,
+                0,
+                |h, s| Ok(view_of(h, s)?.1),
+                |x| x.stack_len(),
+                stack,
+                stack_bytes,
+            )
+        }
+    })
+}
+
+/// `coray_wide_tracer_intersect1` and `_occluded1` on a tracer of this family:
+/// `answer` for the ray.
+///
+/// Safety: as `coray_wide_tracer_intersect1`, with `out` one writable `O`.
+#[inline(always)]
+unsafe fn traced<O>(
+    tracer: *mut CorayTracer,
+    binding: Binding,
+    ray: *const CorayRay,
+    out: *mut O,
+    answer: impl FnOnce(&WideBvh, &coray::Ray, &mut [WideStackItem], &mut TraceStats) -> O,
+) -> Result<(), CorayStatus> {
+    // SAFETY: forwarded caller contract.
+    unsafe {
+        tracer::trace(
+            tracer,
+            binding,
+            #[inline(always)]
+            |h, s| Ok(view_of(h, s)?.1),
+            #[inline(always)]
+            |x| x.stack_len(),
+            ray,
+            out,
+            #[inline(always)]
+            |x, _, r, s, st| Ok(answer(x, r, s, st)),
+        )
+    }
+}
+
+/// The closest hit of `ray` by a tracer of this wide hierarchy (made by
+/// `coray_wide_tracer`), into `hit`: `coray_wide_intersect1`'s answer, with
+/// the checks made once when the tracer was made. Each call checks the
+/// tracer (made by that call, not moved or copied since; of this family),
+/// its handle's seal word, `ray` and `hit` (non-null, aligned, apart, and
+/// `hit` over none of the tracer, its stack, handle, arena or scene, nor
+/// the ray over the tracer or stack), and adds its statistics to the
+/// tracer's (`coray_tracer_stats`). Since 1.5.
+///
+/// Safety: `tracer` NULL or a tracer its make call filled, used by one
+/// thread at a time, whose handle, arena, scene and stack are in place and
+/// (but the stack) unchanged; `ray` NULL or readable; `hit` NULL or
+/// writable.
+#[no_mangle]
+pub unsafe extern "C" fn coray_wide_tracer_intersect1(
+    tracer: *mut CorayTracer,
+    ray: *const CorayRay,
+    hit: *mut CorayHit,
+) -> CorayStatus {
+    guard(|| {
+        // SAFETY: forwarded caller contract.
+        unsafe {
+            let binding = tracer::binding(tracer, Some(KIND_WIDE))?;
+            traced(tracer, binding, ray, hit, |x, r, s, st| {
+                x.intersect(r, s, st).into()
+            })
+        }
+    })
+}
+
+/// Whether something lies on `ray` within `[tnear, tfar]` (1) or not (0),
+/// by a tracer of this wide hierarchy, into `occluded`: `coray_wide_occluded1`'s
+/// answer. Otherwise as `coray_wide_tracer_intersect1`. Since 1.5.
+///
+/// Safety: as `coray_wide_tracer_intersect1`, with `occluded` one writable
+/// byte.
+#[no_mangle]
+pub unsafe extern "C" fn coray_wide_tracer_occluded1(
+    tracer: *mut CorayTracer,
+    ray: *const CorayRay,
+    occluded: *mut u8,
+) -> CorayStatus {
+    guard(|| {
+        // SAFETY: forwarded caller contract.
+        unsafe {
+            let binding = tracer::binding(tracer, Some(KIND_WIDE))?;
+            traced(tracer, binding, ray, occluded, |x, r, s, st| {
+                x.occluded(r, s, st) as u8
+            })
+        }
+    })
 }

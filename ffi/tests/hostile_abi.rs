@@ -103,6 +103,67 @@ fn wide(s: &CorayScene) -> (Vec<Block>, CorayWide) {
     }
 }
 
+/// A TDBS hierarchy over `s`, opened.
+fn bvh(s: &CorayScene) -> (Vec<Block>, CorayBvh) {
+    let p = coray_bvh_params_default(CORAY_BVH_BUILDER_TDBS);
+    let mut r = requirements();
+    unsafe {
+        assert_eq!(coray_bvh_requirements(2, &p, &mut r), CorayStatus::Ok);
+        let mut a = arena(r.arena_bytes);
+        let mut sc = arena(r.scratch_bytes);
+        let null = core::ptr::null_mut();
+        let (ap, bytes) = (a.as_mut_ptr().cast(), r.arena_bytes);
+        let st = coray_bvh_build(
+            s,
+            &p,
+            ap,
+            bytes,
+            sc.as_mut_ptr().cast(),
+            r.scratch_bytes,
+            null,
+        );
+        assert_eq!(st, CorayStatus::Ok);
+        let mut h = CorayBvh { opaque: [0; 32] };
+        assert_eq!(coray_bvh_open(ap, bytes, s, &mut h), CorayStatus::Ok);
+        (a, h)
+    }
+}
+
+/// A projection hierarchy over `s` on [`camera`]'s image plane, opened.
+fn proj(s: &CorayScene) -> (Vec<Block>, CorayProj) {
+    unsafe {
+        let mut plane = CorayProjPlane {
+            struct_size: size_of::<CorayProjPlane>(),
+            ..Default::default()
+        };
+        assert_eq!(
+            coray_proj_camera_plane(&camera(), &mut plane),
+            CorayStatus::Ok
+        );
+        let p = coray_proj_params_default(CORAY_PROJ_CRITERIA_2D, CORAY_BVH_BUILDER_NN_CHAIN);
+        let mut r = requirements();
+        assert_eq!(coray_proj_requirements(2, &p, &mut r), CorayStatus::Ok);
+        let mut a = arena(r.arena_bytes);
+        let mut sc = arena(r.scratch_bytes);
+        let null = core::ptr::null_mut();
+        let (ap, bytes) = (a.as_mut_ptr().cast(), r.arena_bytes);
+        let st = coray_proj_build(
+            s,
+            &p,
+            &plane,
+            ap,
+            bytes,
+            sc.as_mut_ptr().cast(),
+            r.scratch_bytes,
+            null,
+        );
+        assert_eq!(st, CorayStatus::Ok);
+        let mut h = CorayProj { opaque: [0; 32] };
+        assert_eq!(coray_proj_open(ap, bytes, s, &mut h), CorayStatus::Ok);
+        (a, h)
+    }
+}
+
 fn down() -> CorayRay {
     CorayRay {
         org: [0.5, 3.0, 0.5],
@@ -801,28 +862,8 @@ const BVH_STACK: usize = 1024;
 #[test]
 fn the_bvh_one_ray_calls_refuse_what_the_array_calls_refuse() {
     let open = |s: &CorayScene| {
-        let p = coray_bvh_params_default(CORAY_BVH_BUILDER_TDBS);
-        let mut r = requirements();
-        unsafe {
-            assert_eq!(coray_bvh_requirements(2, &p, &mut r), CorayStatus::Ok);
-            let mut a = arena(r.arena_bytes);
-            let mut sc = arena(r.scratch_bytes);
-            let null = core::ptr::null_mut();
-            let (ap, bytes) = (a.as_mut_ptr().cast(), r.arena_bytes);
-            let st = coray_bvh_build(
-                s,
-                &p,
-                ap,
-                bytes,
-                sc.as_mut_ptr().cast(),
-                r.scratch_bytes,
-                null,
-            );
-            assert_eq!(st, CorayStatus::Ok);
-            let mut h = CorayBvh { opaque: [0; 32] };
-            assert_eq!(coray_bvh_open(ap, bytes, s, &mut h), CorayStatus::Ok);
-            (a, h.opaque)
-        }
+        let (a, h) = bvh(s);
+        (a, h.opaque)
     };
     let calls: [(&str, usize, Trace); 4] = [
         (
@@ -882,35 +923,8 @@ fn the_wide_one_ray_calls_refuse_what_the_array_calls_refuse() {
 
 #[test]
 fn the_proj_one_ray_calls_refuse_what_the_array_calls_refuse() {
-    let open = |s: &CorayScene| unsafe {
-        let mut plane = CorayProjPlane {
-            struct_size: size_of::<CorayProjPlane>(),
-            ..Default::default()
-        };
-        assert_eq!(
-            coray_proj_camera_plane(&camera(), &mut plane),
-            CorayStatus::Ok
-        );
-        let p = coray_proj_params_default(CORAY_PROJ_CRITERIA_2D, CORAY_BVH_BUILDER_NN_CHAIN);
-        let mut r = requirements();
-        assert_eq!(coray_proj_requirements(2, &p, &mut r), CorayStatus::Ok);
-        let mut a = arena(r.arena_bytes);
-        let mut sc = arena(r.scratch_bytes);
-        let null = core::ptr::null_mut();
-        let (ap, bytes) = (a.as_mut_ptr().cast(), r.arena_bytes);
-        let st = coray_proj_build(
-            s,
-            &p,
-            &plane,
-            ap,
-            bytes,
-            sc.as_mut_ptr().cast(),
-            r.scratch_bytes,
-            null,
-        );
-        assert_eq!(st, CorayStatus::Ok);
-        let mut h = CorayProj { opaque: [0; 32] };
-        assert_eq!(coray_proj_open(ap, bytes, s, &mut h), CorayStatus::Ok);
+    let open = |s: &CorayScene| {
+        let (a, h) = proj(s);
         (a, h.opaque)
     };
     // A camera ray from the eye towards the floor's centre.
@@ -999,6 +1013,52 @@ fn the_proj_one_ray_calls_refuse_what_the_array_calls_refuse() {
         assert_eq!(
             coray_proj_intersect1(hp, 77, &ray, &mut hit, sp, BVH_STACK, none),
             CorayStatus::InvalidParameter
+        );
+        // A tracer: the one-ray call's answers and refusals.
+        let mut tr = Box::new(CorayTracer { opaque: [0; 24] });
+        let mut tstack = arena(BVH_STACK);
+        let tsp = tstack.as_mut_ptr().cast();
+        assert_eq!(
+            coray_proj_tracer(hp, 77, tsp, BVH_STACK, &mut *tr),
+            CorayStatus::InvalidParameter
+        );
+        assert_eq!(
+            coray_proj_tracer(hp, sc, tsp, BVH_STACK, &mut *tr),
+            CorayStatus::Ok
+        );
+        let (mut want, mut got) = (CorayHit::default(), CorayHit::default());
+        assert_eq!(
+            coray_proj_intersect1(hp, sc, &ray, &mut want, sp, BVH_STACK, none),
+            CorayStatus::Ok
+        );
+        assert_eq!(
+            coray_proj_tracer_intersect1(&mut *tr, &ray, &mut got),
+            CorayStatus::Ok
+        );
+        assert_eq!(format!("{got:?}"), format!("{want:?}"));
+        assert_eq!(want.geom_id, 0, "the camera ray hits the floor");
+        let (mut o1, mut o2) = (5u8, 6u8);
+        assert_eq!(
+            coray_proj_occluded1(hp, sc, &ray, &mut o1, sp, BVH_STACK, none),
+            CorayStatus::Ok
+        );
+        assert_eq!(
+            coray_proj_tracer_occluded1(&mut *tr, &ray, &mut o2),
+            CorayStatus::Ok
+        );
+        assert_eq!((o1, o2), (1, 1));
+        let before = got;
+        assert_eq!(
+            coray_proj_tracer_intersect1(&mut *tr, &down(), &mut got),
+            CorayStatus::InvalidParameter,
+            "a ray off the eye"
+        );
+        assert_eq!(format!("{got:?}"), format!("{before:?}"), "nothing written");
+        // Another family's call refuses it.
+        assert_eq!(
+            coray_kdtree_tracer_intersect1(&mut *tr, &ray, &mut got),
+            CorayStatus::InvalidParameter,
+            "a projection hierarchy's tracer on the kd-tree's call"
         );
     }
 }
@@ -1133,5 +1193,482 @@ fn wide_statuses() {
             coray_wide_open(ap, r.arena_bytes, &s, &mut h),
             CorayStatus::CorruptArena
         );
+    }
+}
+
+/// Rays over and off the floor, from above and below, some invalid: the
+/// rays every tracer test traces.
+fn tracer_rays() -> Vec<CorayRay> {
+    let mut rays = Vec::new();
+    for i in 0..12 {
+        for j in 0..12 {
+            let (x, z) = (i as f32 - 5.5, j as f32 - 5.5);
+            let up = (i + j) % 3 == 0;
+            rays.push(CorayRay {
+                org: [x, if up { -2.0 } else { 3.0 }, z],
+                tnear: 0.0,
+                dir: [0.1, if up { 1.0 } else { -1.0 }, -0.05],
+                tfar: if (i * j) % 7 == 3 { 1.0 } else { f32::INFINITY },
+            });
+        }
+    }
+    rays.push(CorayRay {
+        dir: [0.0; 3],
+        ..down()
+    });
+    rays
+}
+
+/// A tracer of each family answers every ray as the family's array call
+/// does, bit for bit, and sums the array call's statistics.
+#[test]
+fn a_tracer_answers_what_the_array_call_answers() {
+    let f = floor();
+    let s = scene(&f);
+    let rays = tracer_rays();
+    let n = rays.len();
+    let (_ka, kt) = kd(&s);
+    let (_wa, wt) = wide(&s);
+    let (_ba, bt) = bvh(&s);
+    let mut stack = arena(KD_STACK);
+    let sp: *mut c_void = stack.as_mut_ptr().cast();
+    let stats = || CorayTraceStats {
+        struct_size: size_of::<CorayTraceStats>(),
+        ..Default::default()
+    };
+    // (family, make, array intersect, array occluded)
+    type Make<'a> = Box<dyn Fn(*mut CorayTracer) -> CorayStatus + 'a>;
+    type Arrays<'a> = Box<
+        dyn Fn(&mut [CorayHit], &mut [u8], *mut CorayTraceStats) -> (CorayStatus, CorayStatus) + 'a,
+    >;
+    type OnTracer = (
+        unsafe extern "C" fn(*mut CorayTracer, *const CorayRay, *mut CorayHit) -> CorayStatus,
+        unsafe extern "C" fn(*mut CorayTracer, *const CorayRay, *mut u8) -> CorayStatus,
+    );
+    let mut cases: Vec<(String, Make, Arrays, OnTracer)> = Vec::new();
+    for trav in [
+        CORAY_TRAVERSAL_HIERARCHICAL,
+        CORAY_TRAVERSAL_ROPES,
+        CORAY_TRAVERSAL_PACKETS,
+    ] {
+        let (kt, rays) = (&kt, &rays);
+        cases.push((
+            format!("kd traversal {trav}"),
+            Box::new(move |t| unsafe { coray_kdtree_tracer(kt, trav, sp, KD_STACK, t) }),
+            Box::new(move |h, o, st| unsafe {
+                (
+                    coray_kdtree_intersect(
+                        kt,
+                        trav,
+                        rays.as_ptr(),
+                        h.as_mut_ptr(),
+                        n,
+                        sp,
+                        KD_STACK,
+                        st,
+                    ),
+                    coray_kdtree_occluded(
+                        kt,
+                        trav,
+                        rays.as_ptr(),
+                        o.as_mut_ptr(),
+                        n,
+                        sp,
+                        KD_STACK,
+                        core::ptr::null_mut(),
+                    ),
+                )
+            }),
+            (
+                coray_kdtree_tracer_intersect1 as _,
+                coray_kdtree_tracer_occluded1 as _,
+            ),
+        ));
+    }
+    {
+        let (wt, rays) = (&wt, &rays);
+        cases.push((
+            "wide".into(),
+            Box::new(move |t| unsafe { coray_wide_tracer(wt, sp, KD_STACK, t) }),
+            Box::new(move |h, o, st| unsafe {
+                (
+                    coray_wide_intersect(wt, rays.as_ptr(), h.as_mut_ptr(), n, sp, KD_STACK, st),
+                    coray_wide_occluded(
+                        wt,
+                        rays.as_ptr(),
+                        o.as_mut_ptr(),
+                        n,
+                        sp,
+                        KD_STACK,
+                        core::ptr::null_mut(),
+                    ),
+                )
+            }),
+            (
+                coray_wide_tracer_intersect1 as _,
+                coray_wide_tracer_occluded1 as _,
+            ),
+        ));
+    }
+    {
+        let (bt, rays) = (&bt, &rays);
+        cases.push((
+            "bvh".into(),
+            Box::new(move |t| unsafe { coray_bvh_tracer(bt, sp, KD_STACK, t) }),
+            Box::new(move |h, o, st| unsafe {
+                (
+                    coray_bvh_intersect(bt, rays.as_ptr(), h.as_mut_ptr(), n, sp, KD_STACK, st),
+                    coray_bvh_occluded(
+                        bt,
+                        rays.as_ptr(),
+                        o.as_mut_ptr(),
+                        n,
+                        sp,
+                        KD_STACK,
+                        core::ptr::null_mut(),
+                    ),
+                )
+            }),
+            (
+                coray_bvh_tracer_intersect1 as _,
+                coray_bvh_tracer_occluded1 as _,
+            ),
+        ));
+    }
+    for (what, make, arrays, (intersect1, occluded1)) in &cases {
+        let mut want = vec![CorayHit::default(); n];
+        let mut want_occ = vec![0u8; n];
+        let mut want_st = stats();
+        assert_eq!(
+            arrays(&mut want, &mut want_occ, &mut want_st),
+            (CorayStatus::Ok, CorayStatus::Ok),
+            "{what}"
+        );
+        let mut tracer = Box::new(CorayTracer { opaque: [0; 24] });
+        assert_eq!(make(&mut *tracer), CorayStatus::Ok, "{what}");
+        let mut got_st = stats();
+        unsafe {
+            for (i, r) in rays.iter().enumerate() {
+                let mut hit = CorayHit::default();
+                assert_eq!(
+                    intersect1(&mut *tracer, r, &mut hit),
+                    CorayStatus::Ok,
+                    "{what} ray {i}"
+                );
+                assert_eq!(
+                    format!("{hit:?}"),
+                    format!("{:?}", want[i]),
+                    "{what} ray {i}"
+                );
+            }
+            assert_eq!(coray_tracer_stats(&*tracer, &mut got_st), CorayStatus::Ok);
+            assert_eq!(
+                format!("{got_st:?}"),
+                format!("{want_st:?}"),
+                "{what}: the array call's statistics"
+            );
+            for (i, r) in rays.iter().enumerate() {
+                let mut o = 7u8;
+                assert_eq!(
+                    occluded1(&mut *tracer, r, &mut o),
+                    CorayStatus::Ok,
+                    "{what} ray {i}"
+                );
+                assert_eq!(o, want_occ[i], "{what} ray {i}");
+            }
+            assert_eq!(coray_tracer_stats(&*tracer, &mut got_st), CorayStatus::Ok);
+            assert_eq!(got_st.rays, 2 * n as u64, "{what}");
+        }
+        // The floor is hit from above, not from below where the
+        // ray's interval is long enough; some rays miss.
+        assert!(
+            want.iter().any(|h| h.geom_id == 0)
+                && want.iter().any(|h| h.geom_id == CORAY_INVALID_ID),
+            "{what}"
+        );
+    }
+}
+
+/// Every refusal of the tracer calls, each leaving the answer and the
+/// tracer as they were: after each, a good call still gives the floor.
+#[test]
+fn a_tracer_refuses_what_it_cannot_trust() {
+    use CorayStatus::*;
+    let f = floor();
+    let s = scene(&f);
+    let (arena_k, t) = kd(&s);
+    let (_other_arena, other) = kd(&s);
+    // One block holds the stack, a tracer, rays and hits, so that each can
+    // be put over another.
+    const TRACER: usize = KD_STACK;
+    const RAY: usize = TRACER + 256;
+    const HIT: usize = RAY + 64;
+    let mut mem = arena(HIT + 256);
+    let base = mem.as_mut_ptr().cast::<u8>();
+    let sp: *mut c_void = base.cast();
+    let at = |off: usize| unsafe { base.add(off) };
+    let tr = at(TRACER).cast::<CorayTracer>();
+    let ray = at(RAY).cast::<CorayRay>();
+    let hit = at(HIT).cast::<CorayHit>();
+    let none = core::ptr::null_mut();
+    let hier = CORAY_TRAVERSAL_HIERARCHICAL;
+    unsafe {
+        *ray = down();
+        // Making one.
+        assert_eq!(
+            coray_kdtree_tracer(core::ptr::null(), hier, sp, KD_STACK, tr),
+            NullPointer
+        );
+        assert_eq!(
+            coray_kdtree_tracer(&t, hier, none, KD_STACK, tr),
+            NullPointer
+        );
+        assert_eq!(
+            coray_kdtree_tracer(&t, hier, sp, KD_STACK, none.cast()),
+            NullPointer
+        );
+        assert_eq!(
+            coray_kdtree_tracer(&t, hier, at(4).cast(), KD_STACK - 16, tr),
+            Misaligned
+        );
+        assert_eq!(
+            coray_kdtree_tracer(&t, hier, sp, KD_STACK - 1, tr),
+            ArenaTooSmall
+        );
+        assert_eq!(
+            coray_kdtree_tracer(&t, 9, sp, KD_STACK, tr),
+            InvalidParameter
+        );
+        let zeroed = CorayKdTree { opaque: [0; 32] };
+        assert_eq!(
+            coray_kdtree_tracer(&zeroed, hier, sp, KD_STACK, tr),
+            InvalidParameter
+        );
+        assert_eq!(
+            coray_kdtree_tracer(&t, hier, sp, KD_STACK, at(8).cast()),
+            InvalidParameter,
+            "the tracer inside its stack"
+        );
+        let arena_k_ptr = arena_k.as_ptr() as *mut c_void;
+        assert_eq!(
+            coray_kdtree_tracer(&t, hier, arena_k_ptr, KD_STACK, tr),
+            InvalidParameter,
+            "the stack over the arena"
+        );
+        let mut handle_copy = t;
+        let hp: *mut CorayKdTree = &mut handle_copy;
+        assert_eq!(
+            coray_kdtree_tracer(hp, hier, sp, KD_STACK, hp.cast()),
+            InvalidParameter,
+            "the tracer over the handle"
+        );
+        // The wide hierarchy's make call refuses a kd handle.
+        assert_eq!(
+            coray_wide_tracer((&t as *const CorayKdTree).cast(), sp, KD_STACK, tr),
+            InvalidParameter
+        );
+        assert_eq!(coray_kdtree_tracer(&t, hier, sp, KD_STACK, tr), Ok);
+        let made = *tr;
+        let good = |what: &str| {
+            let mut h = CorayHit::default();
+            assert_eq!(
+                coray_kdtree_tracer_intersect1(tr, &down(), &mut h),
+                Ok,
+                "after {what}"
+            );
+            assert_eq!((h.geom_id, h.t), (0, 3.0), "after {what}");
+        };
+        good("making it");
+        // Tracing: each refusal writes no answer.
+        let sentinel = CorayHit {
+            t: -7.0,
+            ..Default::default()
+        };
+        let refuse_only = |what: &str,
+                           t: *mut CorayTracer,
+                           r: *const CorayRay,
+                           h: *mut CorayHit,
+                           want: CorayStatus| {
+            let h_ok = !h.is_null() && (h as usize).is_multiple_of(4);
+            if h_ok {
+                h.write_unaligned(sentinel);
+            }
+            assert_eq!(coray_kdtree_tracer_intersect1(t, r, h), want, "{what}");
+            if h_ok {
+                assert_eq!(h.read_unaligned().t, -7.0, "{what}: the answer was written");
+            }
+            let o = h.cast::<u8>();
+            if !o.is_null() {
+                o.write(9);
+            }
+            assert_eq!(
+                coray_kdtree_tracer_occluded1(t, r, o),
+                want,
+                "{what} (occluded)"
+            );
+            if !o.is_null() {
+                assert_eq!(o.read(), 9, "{what}: the answer was written (occluded)");
+            }
+        };
+        let refuse = |what: &str,
+                      t: *mut CorayTracer,
+                      r: *const CorayRay,
+                      h: *mut CorayHit,
+                      want: CorayStatus| {
+            refuse_only(what, t, r, h, want);
+            good(what);
+        };
+        refuse("a null tracer", none.cast(), ray, hit, NullPointer);
+        refuse("a null ray", tr, core::ptr::null(), hit, NullPointer);
+        refuse("a null answer", tr, ray, none.cast(), NullPointer);
+        refuse(
+            "a misaligned tracer",
+            at(TRACER + 4).cast(),
+            ray,
+            hit,
+            Misaligned,
+        );
+        let mut zero = CorayTracer { opaque: [0; 24] };
+        refuse("a zeroed tracer", &mut zero, ray, hit, InvalidParameter);
+        let mut copy = made;
+        refuse(
+            "a tracer copied elsewhere",
+            &mut copy,
+            ray,
+            hit,
+            InvalidParameter,
+        );
+        for w in 0..12 {
+            let mut damaged = *tr;
+            damaged.opaque[w] ^= 1 << 40;
+            tr.write(damaged);
+            refuse_only(&format!("word {w} damaged"), tr, ray, hit, InvalidParameter);
+            tr.write(made);
+            good("a word restored");
+        }
+        // The handle it was made with, replaced by another tree's.
+        let mut h2 = t;
+        let mut tr2 = Box::new(CorayTracer { opaque: [0; 24] });
+        let mut stack2 = arena(KD_STACK);
+        assert_eq!(
+            coray_kdtree_tracer(&h2, hier, stack2.as_mut_ptr().cast(), KD_STACK, &mut *tr2),
+            Ok
+        );
+        h2 = other;
+        let mut out = CorayHit::default();
+        assert_eq!(
+            coray_kdtree_tracer_intersect1(&mut *tr2, &down(), &mut out),
+            InvalidParameter,
+            "a handle opened on another arena"
+        );
+        let _ = h2;
+        // Answers and rays where they may not lie.
+        refuse(
+            "the answer over the ray",
+            tr,
+            ray,
+            ray.cast(),
+            InvalidParameter,
+        );
+        refuse(
+            "the answer inside the stack",
+            tr,
+            ray,
+            at(512).cast(),
+            InvalidParameter,
+        );
+        refuse(
+            "the answer over the tracer",
+            tr,
+            ray,
+            at(TRACER + 96).cast(),
+            InvalidParameter,
+        );
+        // (no sentinel written in the handle, arena or scene: they must
+        // stay as made)
+        let th = (&t as *const CorayKdTree as *mut CorayKdTree).cast::<CorayHit>();
+        assert_eq!(
+            coray_kdtree_tracer_intersect1(tr, ray, th),
+            InvalidParameter,
+            "the answer over the handle"
+        );
+        assert_eq!(
+            coray_kdtree_tracer_occluded1(tr, ray, th.cast()),
+            InvalidParameter,
+            "the answer over the handle"
+        );
+        good("the answer over the handle");
+        let p = arena_k.as_ptr().cast::<u8>().add(64) as *mut CorayHit;
+        assert_eq!(
+            coray_kdtree_tracer_intersect1(tr, ray, p),
+            InvalidParameter,
+            "the answer over the arena"
+        );
+        assert_eq!(
+            coray_kdtree_tracer_occluded1(tr, ray, p.cast()),
+            InvalidParameter,
+            "the answer over the arena"
+        );
+        good("the answer over the arena");
+        let p = f.vertices.as_ptr() as *mut CorayHit;
+        assert_eq!(
+            coray_kdtree_tracer_intersect1(tr, ray, p),
+            InvalidParameter,
+            "the answer over the vertices"
+        );
+        assert_eq!(
+            coray_kdtree_tracer_occluded1(tr, ray, p.cast()),
+            InvalidParameter,
+            "the answer over the vertices"
+        );
+        good("the answer over the vertices");
+        at(256).cast::<CorayRay>().write(down());
+        refuse(
+            "the ray inside the stack",
+            tr,
+            at(256).cast(),
+            hit,
+            InvalidParameter,
+        );
+        at(TRACER + 128).cast::<CorayRay>().write(down());
+        refuse(
+            "the ray over the tracer's statistics",
+            tr,
+            at(TRACER + 128).cast(),
+            hit,
+            InvalidParameter,
+        );
+        // Places that may: a new answer place after many calls at another.
+        *ray = down();
+        let mut far = [CorayHit::default(); 3];
+        for (i, h) in far.iter_mut().enumerate() {
+            assert_eq!(coray_kdtree_tracer_intersect1(tr, ray, h), Ok, "answer {i}");
+            assert_eq!(h.t, 3.0);
+        }
+        // Statistics.
+        let mut st = CorayTraceStats {
+            struct_size: size_of::<CorayTraceStats>(),
+            ..Default::default()
+        };
+        assert_eq!(coray_tracer_stats(none.cast(), &mut st), NullPointer);
+        assert_eq!(coray_tracer_stats(tr, none.cast()), NullPointer);
+        let mut short = CorayTraceStats {
+            struct_size: 4,
+            ..Default::default()
+        };
+        assert_eq!(coray_tracer_stats(tr, &mut short), InvalidParameter);
+        let over = at(TRACER + 8).cast::<CorayTraceStats>();
+        over.cast::<usize>().write(size_of::<CorayTraceStats>());
+        assert_eq!(
+            coray_tracer_stats(tr, over),
+            InvalidParameter,
+            "the statistics over the tracer"
+        );
+        tr.write(made);
+        assert_eq!(coray_tracer_stats(tr, &mut st), Ok);
+        assert_eq!(st.rays, 0, "a tracer rewritten as made counts from 0");
+        good("its statistics");
+        assert_eq!(coray_tracer_stats(tr, &mut st), Ok);
+        assert_eq!(st.rays, 1, "only successful calls count");
     }
 }

@@ -318,6 +318,30 @@ impl<'a> KdTree<'a> {
         Ok(tree)
     }
 
+    /// [`KdTree::from_parts`] for parts that passed its checks before and
+    /// are unchanged since (a C one-ray call whose memo says so): nothing is
+    /// checked again. Safe on any parts: the slices are taken as they are,
+    /// and traversal of parts that do not match `info` only counts faults.
+    #[inline]
+    pub fn from_checked_parts(
+        scene: Scene<'a>,
+        info: &KdInfo,
+        nodes: &'a [KdNode],
+        ropes: &'a [KdRopes],
+        rope_ids: &'a [u32],
+        refs: &'a [u32],
+    ) -> KdTree<'a> {
+        KdTree {
+            scene,
+            info: *info,
+            trace_box: info.trace_bounds(),
+            nodes,
+            ropes,
+            rope_ids,
+            refs,
+        }
+    }
+
     /// Errors unless `scene` has the primitive counts this tree was built on.
     #[inline]
     pub fn check_scene(&self, scene: &Scene) -> Result<(), Error> {

@@ -4,7 +4,7 @@
 //! decides whether the values make a tree.
 
 use crate::geom::Aabb;
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 
 /// "No node": a rope that leads out of the scene, an exit point with no node.
 pub const NO_NODE: u32 = u32::MAX;
@@ -210,6 +210,7 @@ impl KdInfo {
     }
 
     /// Root box.
+    #[inline]
     pub fn bounds(&self) -> Aabb {
         Aabb {
             min: Vec3::from(self.bounds_min),
@@ -224,21 +225,20 @@ impl KdInfo {
     /// ray's exit point can round onto the wrong side of a split near it,
     /// and a traversal that classifies points would skip the leaf that
     /// holds the hit. All traversals use this one box, so they still agree.
+    ///
+    /// In SIMD lanes: every one-ray C call builds its view of the tree, and
+    /// this box with it.
+    #[inline(always)]
     pub fn trace_bounds(&self) -> Aabb {
-        let b = self.bounds();
-        if b.is_empty() {
-            return b;
+        let (lo, hi) = (Vec3A::from(self.bounds_min), Vec3A::from(self.bounds_max));
+        if !lo.cmple(hi).all() {
+            return self.bounds();
         }
-        let m = b
-            .min
-            .abs()
-            .max(b.max.abs())
-            .max(b.max - b.min)
-            .max_element();
-        let e = Vec3::splat(m * crate::tolerance::LEAF_EXIT_MARGIN);
+        let m = lo.abs().max(hi.abs()).max(hi - lo).max_element();
+        let e = Vec3A::splat(m * crate::tolerance::LEAF_EXIT_MARGIN);
         Aabb {
-            min: b.min - e,
-            max: b.max + e,
+            min: (lo - e).into(),
+            max: (hi + e).into(),
         }
     }
 
@@ -275,6 +275,59 @@ impl KdInfo {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The trace box in SIMD lanes is the scalar formula's, bit for bit:
+    /// boxes tiny and huge, off the origin, flat, a point, and empty.
+    #[test]
+    fn trace_bounds_are_the_scalar_formula() {
+        let scalar = |i: &KdInfo| {
+            let b = i.bounds();
+            if b.is_empty() {
+                return b;
+            }
+            let m = b
+                .min
+                .abs()
+                .max(b.max.abs())
+                .max(b.max - b.min)
+                .max_element();
+            let e = Vec3::splat(m * crate::tolerance::LEAF_EXIT_MARGIN);
+            Aabb {
+                min: b.min - e,
+                max: b.max + e,
+            }
+        };
+        let mut g = crate::rng::SplitMix64(7);
+        let fixed = [
+            ([0.0; 3], [0.0; 3]),
+            ([1.0, 2.0, 3.0], [1.0, 2.0, 3.0]),
+            ([-1e30, 5.0, -2.0], [1e30, 5.0, 4.0]),
+            ([1.0, 0.0, 0.0], [0.0, 1.0, 1.0]),
+            ([1e-30, -1e-30, 0.0], [2e-30, 1e-30, 1e-38]),
+        ];
+        let drawn = (0..2000).map(|_| {
+            let s = 10f32.powi((g.next_f32() * 40.0) as i32 - 20);
+            let o = (g.next_f32() - 0.5) * 1e4 * s;
+            let lo = [0; 3].map(|_| o + (g.next_f32() - 0.5) * s);
+            let hi = lo.map(|x| x + g.next_f32() * s);
+            (lo, hi)
+        });
+        for (lo, hi) in fixed.into_iter().chain(drawn) {
+            let i = KdInfo {
+                bounds_min: lo,
+                bounds_max: hi,
+                ..KdInfo::default()
+            };
+            let (a, b) = (i.trace_bounds(), scalar(&i));
+            let bits = |x: Aabb| {
+                (
+                    x.min.to_array().map(f32::to_bits),
+                    x.max.to_array().map(f32::to_bits),
+                )
+            };
+            assert_eq!(bits(a), bits(b), "{lo:?} {hi:?}");
+        }
+    }
 
     /// Interior and leaf words keep axis, split bits and index apart, for
     /// every axis and up to the largest index a build makes (2^30 - 1).

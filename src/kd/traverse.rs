@@ -204,7 +204,7 @@ impl<'a> KdTree<'a> {
     ///
     /// # Panics
     /// When `stack` is shorter than [`KD_STACK_LEN`].
-    #[inline]
+    #[inline(always)]
     pub fn intersect(
         &self,
         ray: &Ray,
@@ -235,7 +235,7 @@ impl<'a> KdTree<'a> {
     ///
     /// # Panics
     /// When `stack` is shorter than [`KD_STACK_LEN`].
-    #[inline]
+    #[inline(always)]
     pub fn occluded(
         &self,
         ray: &Ray,

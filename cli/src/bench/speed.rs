@@ -20,9 +20,10 @@ use serde::Serialize;
 /// Incoherent rays per scene.
 pub const INCOHERENT_RAYS: usize = 1_000_000;
 
-/// The coray methods traced ray by ray on every set; `kd-c` and `kd-c1`
-/// are `kd` through the C ABI (array calls, one call per ray).
-pub const RAY_METHODS: [&str; 7] = [
+/// The coray methods traced ray by ray on every set; `kd-c`, `kd-c1` and
+/// `kd-c1-handle` are `kd` through the C ABI (array calls; one call per
+/// ray on a tracer per thread; one call per ray with the handle and stack).
+pub const RAY_METHODS: [&str; 8] = [
     "kd",
     "kd-rope",
     "kd-packet",
@@ -30,6 +31,7 @@ pub const RAY_METHODS: [&str; 7] = [
     "wide",
     "kd-c",
     "kd-c1",
+    "kd-c1-handle",
 ];
 
 /// The image casts timed on the primary set (one thread: a cast is one
@@ -282,8 +284,10 @@ columns: rays = rays in the set (primary: one per pixel in 4 x 2 blocks; shadow:
   every primary hit); best = the fastest coray method on that set and its Mrays/s (casts
   count for primary rays); embree1 / embree8 = rtcIntersect1 / rtcIntersect8 (rtcOccluded1
   / rtcOccluded8 for shadow rays) Mrays/s; x e1, x e8 = best over each; then every method's
-  Mrays/s on the same rays (kd-c / kd-c1: kd through the C ABI, one coray_kdtree_intersect
-  call per 4096 rays / one coray_kdtree_intersect1 call per ray; occluded likewise); mism = rays of any coray method answering otherwise than the
+  Mrays/s on the same rays (kd-c / kd-c1 / kd-c1-handle: kd through the C ABI, one
+  coray_kdtree_intersect call per 4096 rays / one coray_kdtree_tracer_intersect1 call per
+  ray on a tracer per thread / one coray_kdtree_intersect1 call per ray with the handle and
+  stack; occluded likewise); mism = rays of any coray method answering otherwise than the
   kd-tree's hierarchical traversal (Embree: beyond coray::tolerance's tie rules). Best of
   --repeat runs, methods interleaved.";
 

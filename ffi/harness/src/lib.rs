@@ -471,6 +471,56 @@ fn open_kd(arena: &[Block], bytes: usize, scene: &CorayScene) -> Result<CorayKdT
     }
 }
 
+/// A family's one-ray calls on a tracer: tracer, ray, answer.
+type TracerCall<O> = unsafe extern "C" fn(*mut CorayTracer, *const CorayRay, *mut O) -> CorayStatus;
+
+/// One-ray calls through a tracer made by `make` on a stack of its own
+/// (`calls`: the family's intersect1 and occluded1 on a tracer): where its
+/// make call and a ray's call succeed, the answer must be the handle's
+/// one-ray call's (`ones`, `one_ok`), bit for bit.
+#[allow(clippy::too_many_arguments)]
+fn traced(
+    family: &str,
+    rays: &[CorayRay],
+    ones: &[CorayHit],
+    one_ok: &[bool],
+    stack_bytes: usize,
+    rep: &mut Report,
+    make: impl FnOnce(*mut c_void, usize, *mut CorayTracer) -> CorayStatus,
+    calls: (TracerCall<CorayHit>, TracerCall<u8>),
+) {
+    let mut stack = blocks(stack_bytes);
+    let mut tracer = Box::new(CorayTracer { opaque: [0; 24] });
+    let made = rep.note(
+        &format!("{family} tracer"),
+        make(stack.as_mut_ptr().cast(), stack_bytes, &mut *tracer),
+    );
+    if made != CorayStatus::Ok {
+        return;
+    }
+    for (i, r) in rays.iter().enumerate() {
+        let mut h = CorayHit::default();
+        let mut o = 0u8;
+        // SAFETY: the tracer was made on a live handle and this stack;
+        // the ray and the answers are locals.
+        let (s, so) = unsafe {
+            (
+                (calls.0)(&mut *tracer, r, &mut h),
+                (calls.1)(&mut *tracer, r, &mut o),
+            )
+        };
+        rep.note(&format!("{family} tracer intersect1"), s);
+        rep.note(&format!("{family} tracer occluded1"), so);
+        if s == CorayStatus::Ok && one_ok[i] {
+            let w = &ones[i];
+            assert!(
+                (h.geom_id, h.prim_id, h.t.to_bits()) == (w.geom_id, w.prim_id, w.t.to_bits()),
+                "{family}: the tracer answers ray {i} otherwise than intersect1: {h:?} against {w:?}"
+            );
+        }
+    }
+}
+
 fn kd_trace(
     t: &CorayKdTree,
     rays: &[CorayRay],
@@ -485,6 +535,7 @@ fn kd_trace(
     let mut occ = vec![0u8; n];
     let mut stats = coray_trace_stats_default();
     let mut statuses = [CorayStatus::Ok; 2];
+    let mut one_ok = vec![false; n];
     // SAFETY: every buffer is live and as long as the count passed; the
     // stack has CORAY_KDTREE_STACK_BYTES aligned bytes.
     unsafe {
@@ -510,7 +561,7 @@ fn kd_trace(
             &mut stats,
         );
         statuses[1] = rep.note("kd occluded", s);
-        for (r, h) in rays.iter().zip(ones.iter_mut()) {
+        for ((r, h), ok) in rays.iter().zip(ones.iter_mut()).zip(one_ok.iter_mut()) {
             let s = coray_kdtree_intersect1(
                 t,
                 traversal,
@@ -520,7 +571,7 @@ fn kd_trace(
                 CORAY_KDTREE_STACK_BYTES,
                 &mut stats,
             );
-            rep.note("kd intersect1", s);
+            *ok = rep.note("kd intersect1", s) == CorayStatus::Ok;
             let mut o = 0u8;
             let s = coray_kdtree_occluded1(
                 t,
@@ -534,6 +585,24 @@ fn kd_trace(
             rep.note("kd occluded1", s);
         }
     }
+    let make = |sp, sb, tr| unsafe {
+        // SAFETY: the handle is live; the stack and tracer are the helper's.
+        coray_kdtree_tracer(t, traversal, sp, sb, tr)
+    };
+    let on_tracer = (
+        coray_kdtree_tracer_intersect1 as TracerCall<CorayHit>,
+        coray_kdtree_tracer_occluded1 as TracerCall<u8>,
+    );
+    traced(
+        "kd",
+        rays,
+        &ones,
+        &one_ok,
+        CORAY_KDTREE_STACK_BYTES,
+        rep,
+        make,
+        on_tracer,
+    );
     (hits, ones, occ, statuses)
 }
 
@@ -762,7 +831,14 @@ struct TraceCalls<H> {
     occluded: ArrayCall<H, u8>,
     intersect1: OneCall<H, CorayHit>,
     occluded1: OneCall<H, u8>,
+    tracer: MakeTracer<H>,
+    tracer_intersect1: TracerCall<CorayHit>,
+    tracer_occluded1: TracerCall<u8>,
 }
+
+/// A tracer's make call: handle, stack, its bytes, the tracer.
+type MakeTracer<H> =
+    unsafe extern "C" fn(*const H, *mut c_void, usize, *mut CorayTracer) -> CorayStatus;
 
 /// An array trace call: handle, rays, answers, count, stack, its bytes, stats.
 type ArrayCall<H, O> = unsafe extern "C" fn(
@@ -803,6 +879,7 @@ fn trace_answers<H>(
     let mut occ = vec![0u8; n];
     let mut stats = coray_trace_stats_default();
     let mut statuses = [CorayStatus::Ok; 2];
+    let mut one_ok = vec![false; n];
     let what = |call: &str| format!("{family} {call}");
     // SAFETY: every buffer is live and as long as the count passed.
     unsafe {
@@ -814,11 +891,11 @@ fn trace_answers<H>(
             &what("occluded"),
             (calls.occluded)(h, rays.as_ptr(), occ.as_mut_ptr(), n, sp, sb, &mut stats),
         );
-        for (r, one) in rays.iter().zip(ones.iter_mut()) {
-            rep.note(
+        for ((r, one), ok) in rays.iter().zip(ones.iter_mut()).zip(one_ok.iter_mut()) {
+            *ok = rep.note(
                 &what("intersect1"),
                 (calls.intersect1)(h, r, one, sp, sb, &mut stats),
-            );
+            ) == CorayStatus::Ok;
             let mut o = 0u8;
             rep.note(
                 &what("occluded1"),
@@ -826,6 +903,21 @@ fn trace_answers<H>(
             );
         }
     }
+    let make = |sp, sb, tr| unsafe {
+        // SAFETY: the handle is live; the stack and tracer are the helper's.
+        (calls.tracer)(h, sp, sb, tr)
+    };
+    let on_tracer = (calls.tracer_intersect1, calls.tracer_occluded1);
+    traced(
+        family,
+        rays,
+        &ones,
+        &one_ok,
+        stack_bytes,
+        rep,
+        make,
+        on_tracer,
+    );
     (hits, ones, occ, statuses)
 }
 
@@ -835,6 +927,9 @@ fn bvh_trace(h: &CorayBvh, rays: &[CorayRay], stack_bytes: usize, rep: &mut Repo
         occluded: coray_bvh_occluded,
         intersect1: coray_bvh_intersect1,
         occluded1: coray_bvh_occluded1,
+        tracer: coray_bvh_tracer,
+        tracer_intersect1: coray_bvh_tracer_intersect1,
+        tracer_occluded1: coray_bvh_tracer_occluded1,
     };
     trace_answers("bvh", h, rays, stack_bytes, rep, calls)
 }
@@ -910,6 +1005,9 @@ fn wide_trace(h: &CorayWide, rays: &[CorayRay], stack_bytes: usize, rep: &mut Re
         occluded: coray_wide_occluded,
         intersect1: coray_wide_intersect1,
         occluded1: coray_wide_occluded1,
+        tracer: coray_wide_tracer,
+        tracer_intersect1: coray_wide_tracer_intersect1,
+        tracer_occluded1: coray_wide_tracer_occluded1,
     };
     trace_answers("wide", h, rays, stack_bytes, rep, calls)
 }
@@ -1039,6 +1137,7 @@ fn proj_trace(
     let mut occ = vec![0u8; n];
     let mut stats = coray_trace_stats_default();
     let mut statuses = [CorayStatus::Ok; 2];
+    let mut one_ok = vec![false; n];
     // SAFETY: every buffer is live and as long as the count passed.
     unsafe {
         statuses[0] = rep.note(
@@ -1067,11 +1166,11 @@ fn proj_trace(
                 &mut stats,
             ),
         );
-        for (r, one) in rays.iter().zip(ones.iter_mut()) {
-            rep.note(
+        for ((r, one), ok) in rays.iter().zip(ones.iter_mut()).zip(one_ok.iter_mut()) {
+            *ok = rep.note(
                 "proj intersect1",
                 coray_proj_intersect1(h, scheme, r, one, sp, sb, &mut stats),
-            );
+            ) == CorayStatus::Ok;
             let mut o = 0u8;
             rep.note(
                 "proj occluded1",
@@ -1079,6 +1178,24 @@ fn proj_trace(
             );
         }
     }
+    let make = |sp, sb, tr| unsafe {
+        // SAFETY: the handle is live; the stack and tracer are the helper's.
+        coray_proj_tracer(h, scheme, sp, sb, tr)
+    };
+    let on_tracer = (
+        coray_proj_tracer_intersect1 as TracerCall<CorayHit>,
+        coray_proj_tracer_occluded1 as TracerCall<u8>,
+    );
+    traced(
+        "proj",
+        rays,
+        &ones,
+        &one_ok,
+        stack_bytes,
+        rep,
+        make,
+        on_tracer,
+    );
     (hits, ones, occ, statuses)
 }
 
