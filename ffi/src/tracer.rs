@@ -290,10 +290,8 @@ pub(crate) unsafe fn trace<'a, S, I: Plain, O>(
         b.out = Span::gap_around(o, ob, &out_meets);
         b.ray = Span::gap_around(r, rb, &[stack, own]);
         b.check = b.check_of(tracer as usize);
-        // SAFETY: the tracer is writable (contract), and no reference to
-        // it is alive.
-        unsafe { tracer.cast::<[u64; BINDING_WORDS]>().write(b.words()) };
     }
+    let moved = b != binding;
     // SAFETY: the arena's header and parts passed `view`'s checks when the
     // tracer was made and are unchanged (contract).
     let s = view(h, scene)?;
@@ -318,11 +316,16 @@ pub(crate) unsafe fn trace<'a, S, I: Plain, O>(
         .wrapping_add(TOTALS_AT)
         .cast::<TraceStats>();
     // SAFETY: the totals' words lie within the tracer (asserted above),
-    // 8-aligned; any bits are a valid TraceStats; no reference is alive.
+    // 8-aligned; any bits are a valid TraceStats; the tracer is writable
+    // (contract) and no reference to it is alive. Its ranges change only
+    // with a call that succeeds.
     unsafe {
         let mut t = totals.read();
         t.add(&st);
         totals.write(t);
+        if moved {
+            tracer.cast::<[u64; BINDING_WORDS]>().write(b.words());
+        }
     }
     // SAFETY: checked non-null and aligned, and disjoint from every buffer
     // this call reads or writes.

@@ -1493,9 +1493,16 @@ fn a_tracer_refuses_what_it_cannot_trust() {
             if h_ok {
                 h.write_unaligned(sentinel);
             }
+            let words = |t: *mut CorayTracer| {
+                (!t.is_null() && (t as usize).is_multiple_of(8)).then(|| (*t).opaque)
+            };
+            let before = words(t);
             assert_eq!(coray_kdtree_tracer_intersect1(t, r, h), want, "{what}");
             if h_ok {
                 assert_eq!(h.read_unaligned().t, -7.0, "{what}: the answer was written");
+            }
+            if !(t as usize..t as usize + size_of::<CorayTracer>()).contains(&(h as usize)) {
+                assert_eq!(words(t), before, "{what}: the tracer was written");
             }
             let o = h.cast::<u8>();
             if !o.is_null() {
