@@ -283,7 +283,7 @@ typedef struct CorayHit {
 // Written by every call on it: one thread at a time.
 typedef struct CorayTracer {
   // Opaque to the caller.
-  uint64_t opaque[24];
+  uint64_t opaque[32];
 } CorayTracer;
 
 // A pinhole camera as NFF's `v` block gives it.

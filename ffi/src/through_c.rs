@@ -117,7 +117,7 @@ impl<'s> CKdTree<'s> {
     /// A tracer on this tree by its traversal, with a stack of its own.
     pub fn tracer(&self) -> Result<CTracer<'_>, CorayStatus> {
         let mut t = CTracer {
-            tracer: std::boxed::Box::new(CorayTracer { opaque: [0; 24] }),
+            tracer: std::boxed::Box::new(CorayTracer { opaque: [0; 32] }),
             _stack: CStack::default(),
             _tree: PhantomData,
         };

@@ -31,14 +31,15 @@ use core::mem::{align_of, size_of};
 #[derive(Clone, Copy, Debug)]
 pub struct CorayTracer {
     /// Opaque to the caller.
-    pub opaque: [u64; 24],
+    pub opaque: [u64; 32],
 }
 
 /// Words of a tracer: the binding's (its check first) and, after them,
-/// the running statistics.
+/// the running statistics; 9 of its 32 words are free for later fields
+/// (the size is the handles', 256 bytes, and part of the ABI).
 const BINDING_WORDS: usize = 12;
 const TOTALS_AT: usize = BINDING_WORDS;
-const _: () = assert!(TOTALS_AT + size_of::<TraceStats>() / 8 <= 24);
+const _: () = assert!(TOTALS_AT + size_of::<TraceStats>() / 8 <= 32);
 const _: () = assert!(size_of::<TraceStats>() == 11 * 8 && align_of::<TraceStats>() == 8);
 
 /// What a tracer's make call checked, as its words keep it.
@@ -187,7 +188,7 @@ pub(crate) unsafe fn make<'a, S, I: Plain>(
         ray: (1, 1),
     };
     b.check = b.check_of(tracer as usize);
-    let mut words = [0u64; 24];
+    let mut words = [0u64; 32];
     words[..BINDING_WORDS].copy_from_slice(&b.words());
     // SAFETY: checked non-null and aligned, writable by the contract, and
     // disjoint from everything this call read.

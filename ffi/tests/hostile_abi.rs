@@ -1015,7 +1015,7 @@ fn the_proj_one_ray_calls_refuse_what_the_array_calls_refuse() {
             CorayStatus::InvalidParameter
         );
         // A tracer: the one-ray call's answers and refusals.
-        let mut tr = Box::new(CorayTracer { opaque: [0; 24] });
+        let mut tr = Box::new(CorayTracer { opaque: [0; 32] });
         let mut tstack = arena(BVH_STACK);
         let tsp = tstack.as_mut_ptr().cast();
         assert_eq!(
@@ -1344,7 +1344,7 @@ fn a_tracer_answers_what_the_array_call_answers() {
             (CorayStatus::Ok, CorayStatus::Ok),
             "{what}"
         );
-        let mut tracer = Box::new(CorayTracer { opaque: [0; 24] });
+        let mut tracer = Box::new(CorayTracer { opaque: [0; 32] });
         assert_eq!(make(&mut *tracer), CorayStatus::Ok, "{what}");
         let mut got_st = stats();
         unsafe {
@@ -1535,7 +1535,7 @@ fn a_tracer_refuses_what_it_cannot_trust() {
             hit,
             Misaligned,
         );
-        let mut zero = CorayTracer { opaque: [0; 24] };
+        let mut zero = CorayTracer { opaque: [0; 32] };
         refuse("a zeroed tracer", &mut zero, ray, hit, InvalidParameter);
         let mut copy = made;
         refuse(
@@ -1555,7 +1555,7 @@ fn a_tracer_refuses_what_it_cannot_trust() {
         }
         // The handle it was made with, replaced by another tree's.
         let mut h2 = t;
-        let mut tr2 = Box::new(CorayTracer { opaque: [0; 24] });
+        let mut tr2 = Box::new(CorayTracer { opaque: [0; 32] });
         let mut stack2 = arena(KD_STACK);
         assert_eq!(
             coray_kdtree_tracer(&h2, hier, stack2.as_mut_ptr().cast(), KD_STACK, &mut *tr2),

@@ -490,7 +490,7 @@ fn traced(
     calls: (TracerCall<CorayHit>, TracerCall<u8>),
 ) {
     let mut stack = blocks(stack_bytes);
-    let mut tracer = Box::new(CorayTracer { opaque: [0; 24] });
+    let mut tracer = Box::new(CorayTracer { opaque: [0; 32] });
     let made = rep.note(
         &format!("{family} tracer"),
         make(stack.as_mut_ptr().cast(), stack_bytes, &mut *tracer),
