@@ -1,8 +1,10 @@
 //! The body of every one-ray entry point (`coray_<object>_intersect1`,
 //! `_occluded1`): the array calls' checks, statuses and their order for one
 //! ray, on spans known at compile time. No region list is filled, no chunk
-//! loop runs and no statistics are merged, so a renderer that traces one
-//! ray per call pays little more per ray than an array call does.
+//! loop runs and no statistics are merged; still, every check runs on every
+//! call (about 590 instructions on x86-64 beyond what an array call spends
+//! per ray). A renderer that traces one ray per call makes a tracer
+//! (`tracer.rs`), which makes these checks once.
 
 use crate::abi::{CorayRay, CorayTraceStats};
 use crate::carve::{self, Out, Plain, ReadSpans, Span};
