@@ -842,7 +842,9 @@ enum CorayStatus coray_bvh_occluded1(const struct CorayBvh *bvh,
 // Makes `tracer` trace `bvh` with the caller's `stack` (at least the
 // info's `stack_bytes`, 16-byte aligned): one thread's
 // `coray_bvh_tracer_intersect1` and `_occluded1` calls then skip the checks
-// this call makes. Since 1.5.
+// this call makes. An R-tree that `coray_bvh_insert` deepened past what
+// the stack holds gets `CORAY_STATUS_ARENA_TOO_SMALL` from them: make the
+// tracer again with the info's new `stack_bytes`. Since 1.5.
 //
 // Safety: `bvh` as in `coray_bvh_info`; `stack` NULL or writable
 // for `stack_bytes`, and used by nothing else while the tracer is;

@@ -155,10 +155,12 @@ pub(crate) unsafe fn make<'a, S, I: Plain>(
         let s = view(h, scene)?;
         let need = stack_len(&s).max(1);
         carve::check_arena(stack.cast::<u8>())?;
-        if stack_bytes > isize::MAX as usize
-            || need
-                .checked_mul(size_of::<I>())
-                .is_none_or(|b| b > stack_bytes)
+        if stack_bytes > isize::MAX as usize {
+            return Err(CorayStatus::InvalidParameter);
+        }
+        if need
+            .checked_mul(size_of::<I>())
+            .is_none_or(|b| b > stack_bytes)
         {
             return Err(CorayStatus::ArenaTooSmall);
         }

@@ -1436,6 +1436,11 @@ fn a_tracer_refuses_what_it_cannot_trust() {
             ArenaTooSmall
         );
         assert_eq!(
+            coray_kdtree_tracer(&t, hier, sp, usize::MAX, tr),
+            InvalidParameter,
+            "a stack of more bytes than an object can have"
+        );
+        assert_eq!(
             coray_kdtree_tracer(&t, 9, sp, KD_STACK, tr),
             InvalidParameter
         );
@@ -1677,5 +1682,101 @@ fn a_tracer_refuses_what_it_cannot_trust() {
         good("its statistics");
         assert_eq!(coray_tracer_stats(tr, &mut st), Ok);
         assert_eq!(st.rays, 1, "only successful calls count");
+    }
+}
+
+/// An R-tree deepened by inserts past its tracer's stack: the tracer's
+/// calls refuse with `ARENA_TOO_SMALL` (no trace runs), and a tracer made
+/// again with the info's new `stack_bytes` traces it.
+#[test]
+fn a_deepened_rtree_needs_a_new_tracer() {
+    // A strip of 16 triangles along x.
+    let mut vertices = Vec::new();
+    let mut indices = Vec::new();
+    for i in 0..17u32 {
+        vertices.extend_from_slice(&[i as f32, 0.0, 0.0, i as f32, 0.0, 1.0]);
+        if i < 16 {
+            indices.extend_from_slice(&[2 * i, 2 * i + 2, 2 * i + 1]);
+        }
+    }
+    let mut s = coray_scene_default();
+    s.vertices = vertices.as_ptr();
+    s.vertex_count = 34;
+    s.indices = indices.as_ptr();
+    s.triangle_count = 16;
+    let p = coray_bvh_params_default(CORAY_BVH_BUILDER_RTREE);
+    let mut r = requirements();
+    unsafe {
+        assert_eq!(coray_bvh_requirements(400, &p, &mut r), CorayStatus::Ok);
+        let mut a = arena(r.arena_bytes);
+        let mut sc = arena(r.scratch_bytes);
+        let ap: *mut c_void = a.as_mut_ptr().cast();
+        let st = coray_bvh_build(
+            &s,
+            &p,
+            ap,
+            r.arena_bytes,
+            sc.as_mut_ptr().cast(),
+            r.scratch_bytes,
+            core::ptr::null_mut(),
+        );
+        assert_eq!(st, CorayStatus::Ok);
+        let mut h = CorayBvh { opaque: [0; 32] };
+        assert_eq!(
+            coray_bvh_open(ap, r.arena_bytes, &s, &mut h),
+            CorayStatus::Ok
+        );
+        let mut info = coray_bvh_info_default();
+        assert_eq!(coray_bvh_info(&h, &mut info), CorayStatus::Ok);
+        let (depth0, bytes0) = (info.depth, info.stack_bytes);
+        let mut stack = arena(bytes0);
+        let mut tr = Box::new(CorayTracer { opaque: [0; 32] });
+        assert_eq!(
+            coray_bvh_tracer(&h, stack.as_mut_ptr().cast(), bytes0, &mut *tr),
+            CorayStatus::Ok
+        );
+        let ray = CorayRay {
+            org: [3.3, 2.0, 0.5],
+            tnear: 0.0,
+            dir: [0.0, -1.0, 0.0],
+            tfar: f32::INFINITY,
+        };
+        let mut hit = CorayHit::default();
+        assert_eq!(
+            coray_bvh_tracer_intersect1(&mut *tr, &ray, &mut hit),
+            CorayStatus::Ok
+        );
+        assert_eq!((hit.prim_id, hit.t), (3, 2.0));
+        // Every triangle again, many times: the tree deepens.
+        for k in 0..380u32 {
+            let st = coray_bvh_insert(ap, r.arena_bytes, &s, CORAY_GEOM_TRIANGLES, k % 16);
+            assert_eq!(st, CorayStatus::Ok, "insert {k}");
+        }
+        assert_eq!(coray_bvh_info(&h, &mut info), CorayStatus::Ok);
+        assert!(
+            info.depth > depth0 && info.stack_bytes > bytes0,
+            "{depth0} -> {}",
+            info.depth
+        );
+        let mut sentinel = CorayHit {
+            t: -7.0,
+            ..Default::default()
+        };
+        assert_eq!(
+            coray_bvh_tracer_intersect1(&mut *tr, &ray, &mut sentinel),
+            CorayStatus::ArenaTooSmall
+        );
+        assert_eq!(sentinel.t, -7.0, "nothing written");
+        let mut stack2 = arena(info.stack_bytes);
+        assert_eq!(
+            coray_bvh_tracer(&h, stack2.as_mut_ptr().cast(), info.stack_bytes, &mut *tr),
+            CorayStatus::Ok
+        );
+        assert_eq!(
+            coray_bvh_tracer_intersect1(&mut *tr, &ray, &mut hit),
+            CorayStatus::Ok
+        );
+        assert_eq!((hit.prim_id, hit.t), (3, 2.0));
+        drop(stack);
     }
 }
