@@ -6,7 +6,7 @@ use crate::abi::*;
 use crate::carve::{self, check_arena, Out, OutValue, Regions, Versioned};
 use crate::handle::{self, Handle, Sealed, KIND_KD};
 use crate::one_ray::one_ray;
-use crate::tracer::{self, CorayTracer};
+use crate::tracer::{self, Binding, CorayTracer};
 use crate::{guard, CorayKdRunJobs, CorayKdTree, CorayStatus};
 use coray::kd::layout::{KdArenaHeader, KdArenaLayout, KdScratchLayout, KD_HEADER_BYTES};
 use coray::kd::{
@@ -439,45 +439,56 @@ pub unsafe extern "C" fn coray_kdtree_open(
     })
 }
 
-/// The tree a handle describes, over `scene`.
+/// A handle's header and arena parts: nodes, ropes, rope records,
+/// references.
 ///
 /// Safety: the handle's arena is readable and unchanged during `'a`.
 #[inline(always)]
-unsafe fn tree_of<'a>(h: Sealed, scene: coray::Scene<'a>) -> Result<KdTree<'a>, CorayStatus> {
+#[allow(clippy::type_complexity)]
+unsafe fn parts_of<'a>(
+    h: Sealed,
+) -> (
+    &'a coray::kd::KdInfo,
+    &'a [KdNode],
+    &'a [KdRopes],
+    &'a [u32],
+    &'a [u32],
+) {
     // SAFETY: the handle's parts lie within its arena, each checked for
     // its type when the handle was opened (Handle::set_part); readable by
     // the caller's contract.
     unsafe {
-        let header = &h.part::<KdArenaHeader>(0)[0];
-        Ok(KdTree::from_parts(
-            scene,
-            header.info,
-            h.part::<KdNode>(1),
-            h.part::<KdRopes>(2),
-            h.part::<u32>(3),
-            h.part::<u32>(4),
-        )?)
+        (
+            &h.part::<KdArenaHeader>(0)[0].info,
+            h.part(1),
+            h.part(2),
+            h.part(3),
+            h.part(4),
+        )
     }
+}
+
+/// The tree a handle describes, over `scene`.
+///
+/// Safety: as [`parts_of`].
+#[inline(always)]
+unsafe fn tree_of<'a>(h: Sealed, scene: coray::Scene<'a>) -> Result<KdTree<'a>, CorayStatus> {
+    // SAFETY: forwarded contract.
+    let (info, nodes, ropes, rope_ids, refs) = unsafe { parts_of(h) };
+    Ok(KdTree::from_parts(
+        scene, *info, nodes, ropes, rope_ids, refs,
+    )?)
 }
 
 /// The tree a handle describes whose header and parts passed [`tree_of`]'s
 /// checks when a tracer was made: nothing is checked again.
 ///
-/// Safety: as [`tree_of`].
+/// Safety: as [`parts_of`].
 #[inline(always)]
 unsafe fn known_tree_of<'a>(h: Sealed, scene: coray::Scene<'a>) -> KdTree<'a> {
-    // SAFETY: as in tree_of.
-    unsafe {
-        let header = &h.part::<KdArenaHeader>(0)[0];
-        KdTree::from_checked_parts(
-            scene,
-            &header.info,
-            h.part::<KdNode>(1),
-            h.part::<KdRopes>(2),
-            h.part::<u32>(3),
-            h.part::<u32>(4),
-        )
-    }
+    // SAFETY: forwarded contract.
+    let (info, nodes, ropes, rope_ids, refs) = unsafe { parts_of(h) };
+    KdTree::from_checked_parts(scene, info, nodes, ropes, rope_ids, refs)
 }
 
 /// The tree behind a caller's handle, its buffers noted in `regions`.
@@ -905,6 +916,35 @@ pub unsafe extern "C" fn coray_kdtree_tracer(
     })
 }
 
+/// `coray_kdtree_tracer_intersect1` and `_occluded1`: `answer` for the
+/// ray, by the tracer's traversal.
+///
+/// Safety: as `coray_kdtree_tracer_intersect1`, with `out` one writable `O`.
+#[inline(always)]
+unsafe fn traced<O>(
+    tracer: *mut CorayTracer,
+    binding: Binding,
+    ray: *const CorayRay,
+    out: *mut O,
+    answer: impl FnOnce(&KdTree, &coray::Ray, Traversal, &mut [KdStackItem], &mut TraceStats) -> O,
+) -> Result<(), CorayStatus> {
+    // SAFETY: forwarded caller contract.
+    unsafe {
+        tracer::trace(
+            tracer,
+            binding,
+            #[inline(always)]
+            |h, s| Ok(known_tree_of(h, s)),
+            #[inline(always)]
+            |_| KD_STACK_LEN,
+            ray,
+            out,
+            #[inline(always)]
+            |t, m, r, s, st| Ok(answer(t, r, traversal(m as CorayTraversal)?, s, st)),
+        )
+    }
+}
+
 /// The closest hit of `ray` by a tracer of this kd-tree (made by
 /// `coray_kdtree_tracer`), into `hit`: `coray_kdtree_intersect1`'s answer, with
 /// the checks made once when the tracer was made. Each call checks the
@@ -928,21 +968,9 @@ pub unsafe extern "C" fn coray_kdtree_tracer_intersect1(
         // SAFETY: forwarded caller contract.
         unsafe {
             let binding = tracer::binding(tracer, Some(KIND_KD))?;
-            tracer::trace(
-                tracer,
-                binding,
-                #[inline(always)]
-                |h, s| Ok(known_tree_of(h, s)),
-                #[inline(always)]
-                |_| KD_STACK_LEN,
-                ray,
-                hit,
-                #[inline(always)]
-                |t, m, r, s: &mut [KdStackItem], st| {
-                    let m = traversal(m as CorayTraversal)?;
-                    Ok(CorayHit::from(KdTree::intersect(t, r, m, s, st)))
-                },
-            )
+            traced(tracer, binding, ray, hit, |t, r, m, s, st| {
+                KdTree::intersect(t, r, m, s, st).into()
+            })
         }
     })
 }
@@ -963,21 +991,9 @@ pub unsafe extern "C" fn coray_kdtree_tracer_occluded1(
         // SAFETY: forwarded caller contract.
         unsafe {
             let binding = tracer::binding(tracer, Some(KIND_KD))?;
-            tracer::trace(
-                tracer,
-                binding,
-                #[inline(always)]
-                |h, s| Ok(known_tree_of(h, s)),
-                #[inline(always)]
-                |_| KD_STACK_LEN,
-                ray,
-                occluded,
-                #[inline(always)]
-                |t, m, r, s: &mut [KdStackItem], st| {
-                    let m = traversal(m as CorayTraversal)?;
-                    Ok(KdTree::occluded(t, r, m, s, st) as u8)
-                },
-            )
+            traced(tracer, binding, ray, occluded, |t, r, m, s, st| {
+                KdTree::occluded(t, r, m, s, st) as u8
+            })
         }
     })
 }

@@ -35,9 +35,9 @@ pub struct CorayTracer {
 }
 
 /// Words of a tracer: the binding's (its check first) and, after them,
-/// the running statistics; 9 of its 32 words are free for later fields
+/// the running statistics; 10 of its 32 words are free for later fields
 /// (the size is the handles', 256 bytes, and part of the ABI).
-const BINDING_WORDS: usize = 12;
+const BINDING_WORDS: usize = 11;
 const TOTALS_AT: usize = BINDING_WORDS;
 const _: () = assert!(TOTALS_AT + size_of::<TraceStats>() / 8 <= 32);
 const _: () = assert!(size_of::<TraceStats>() == 11 * 8 && align_of::<TraceStats>() == 8);
@@ -54,10 +54,9 @@ pub(crate) struct Binding {
     /// The handle's address and its seal word then.
     handle: usize,
     handle_seal: u64,
-    /// The stack's address and bytes: `entries` of the family's item.
+    /// The stack's address and bytes.
     stack: usize,
     stack_bytes: usize,
-    entries: usize,
     /// Where an answer may lie, `[lo, hi)`, from the last call that checked
     /// one against every buffer (empty until a call does).
     out: (usize, usize),
@@ -90,7 +89,6 @@ impl Binding {
             self.handle_seal,
             self.stack as u64,
             self.stack_bytes as u64,
-            self.entries as u64,
             self.out.0 as u64,
             self.out.1 as u64,
             self.ray.0 as u64,
@@ -108,18 +106,17 @@ impl Binding {
             handle_seal: w[4],
             stack: w[5] as usize,
             stack_bytes: w[6] as usize,
-            entries: w[7] as usize,
-            out: (w[8] as usize, w[9] as usize),
-            ray: (w[10] as usize, w[11] as usize),
+            out: (w[7] as usize, w[8] as usize),
+            ray: (w[9] as usize, w[10] as usize),
         }
     }
 }
 
 /// Whether `[p, p + bytes)` lies in `[lo, hi)` (`lo` is at least 1, so
-/// never at NULL) at an address aligned for `align`.
+/// never at NULL).
 #[inline(always)]
-fn lies_in(p: usize, bytes: usize, align: usize, (lo, hi): (usize, usize)) -> bool {
-    p >= lo && hi >= bytes && p <= hi - bytes && p.is_multiple_of(align)
+fn lies_in(p: usize, bytes: usize, (lo, hi): (usize, usize)) -> bool {
+    p >= lo && hi >= bytes && p <= hi - bytes
 }
 
 /// Makes the tracer at `tracer` for the structure behind `handle` (of
@@ -185,7 +182,6 @@ pub(crate) unsafe fn make<'a, S, I: Plain>(
         handle_seal: h.seal(),
         stack: stack as usize,
         stack_bytes,
-        entries: stack_bytes / size_of::<I>(),
         out: (1, 1),
         ray: (1, 1),
     };
@@ -265,7 +261,8 @@ pub(crate) unsafe fn trace<'a, S, I: Plain, O>(
     let (r, o) = (ray as usize, out as usize);
     let (rb, ob) = (size_of::<CorayRay>(), size_of::<O>());
     let apart = r + rb <= o || o + ob <= r;
-    let placed = lies_in(o, ob, align_of::<O>(), b.out) && lies_in(r, rb, 1, b.ray);
+    // (Null and alignment were checked just above.)
+    let placed = lies_in(o, ob, b.out) && lies_in(r, rb, b.ray);
     if !(apart && placed) {
         let [handle_words, arena] = h.spans();
         let [vertices, triangles, spheres, cones] = Span::of_scene(&scene);
@@ -299,13 +296,14 @@ pub(crate) unsafe fn trace<'a, S, I: Plain, O>(
     // tracer was made and are unchanged (contract).
     let s = view(h, scene)?;
     let need = stack_len(&s);
-    if need > b.entries {
+    if need > b.stack_bytes / size_of::<I>() {
         return Err(CorayStatus::ArenaTooSmall);
     }
     // SAFETY: the make call checked the stack non-null, 16-aligned,
-    // `entries` items long and disjoint from every buffer read (handle,
-    // arena, scene) and from the tracer; `ray` and `out` meet it nowhere
-    // (checked above); the calling thread owns it (contract).
+    // `stack_bytes` long (`need` items fit, just checked) and disjoint from
+    // every buffer read (handle, arena, scene) and from the tracer; `ray`
+    // and `out` meet it nowhere (checked above); the calling thread owns it
+    // (contract).
     let stk: &mut [I] = unsafe { carve::arena_mut(b.stack as *mut u8, 0, need) };
     // SAFETY: checked non-null and aligned, readable (contract).
     let ray = coray::Ray::from(&unsafe { ray.read() });

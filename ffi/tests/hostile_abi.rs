@@ -1550,7 +1550,7 @@ fn a_tracer_refuses_what_it_cannot_trust() {
             hit,
             InvalidParameter,
         );
-        for w in 0..12 {
+        for w in 0..11 {
             let mut damaged = *tr;
             damaged.opaque[w] ^= 1 << 40;
             tr.write(damaged);

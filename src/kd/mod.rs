@@ -305,22 +305,21 @@ impl<'a> KdTree<'a> {
         {
             return Err(Error::Corrupt { what: "counts" });
         }
-        let tree = KdTree {
+        let tree = KdTree::from_checked_parts(
             scene,
-            info,
-            trace_box: info.trace_bounds(),
-            nodes: &nodes[..info.node_count as usize],
-            ropes: &ropes[..info.rope_count() as usize],
-            rope_ids: &rope_ids[..info.rope_id_count() as usize],
-            refs: &refs[..info.ref_count as usize],
-        };
+            &info,
+            &nodes[..info.node_count as usize],
+            &ropes[..info.rope_count() as usize],
+            &rope_ids[..info.rope_id_count() as usize],
+            &refs[..info.ref_count as usize],
+        );
         tree.check_scene(&scene)?;
         Ok(tree)
     }
 
     /// [`KdTree::from_parts`] for parts that passed its checks before and
-    /// are unchanged since (a C one-ray call whose memo says so): nothing is
-    /// checked again. Safe on any parts: the slices are taken as they are,
+    /// are unchanged since (a C tracer's, checked when it was made): nothing
+    /// is checked again. Safe on any parts: the slices are taken as they are,
     /// and traversal of parts that do not match `info` only counts faults.
     #[inline]
     pub fn from_checked_parts(
