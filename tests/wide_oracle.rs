@@ -192,10 +192,90 @@ fn corner_blocks_cover_the_runs_with_triangles() {
                 "{blocks} blocks, {n} refs"
             ),
         }
+        // Runs holding triangles and spheres or cones together: their
+        // other slots are found by their blocks' NaN lanes, not by reading
+        // their references.
+        let mixed = mixed_runs(&w);
+        if tris > 0 && others > 0 {
+            assert!(mixed > 20, "{mixed} mixed runs");
+        } else {
+            assert_eq!(mixed, 0);
+        }
         let kd = OwnedKd::new(&scene, &KdParams::auto()).unwrap();
         let rays = random_rays(&mut rng, 1000, 5.0);
         let hits = check(&w, &kd.tree(scene).unwrap(), &rays, "corner blocks");
         assert!(hits > 100, "{hits} hits");
+    }
+}
+
+/// Leaf entries whose run holds a triangle and a sphere or cone.
+fn mixed_runs(w: &WideBvh) -> usize {
+    let (nodes, refs) = w.parts();
+    let nt = w.scene().triangles.len() as u32;
+    let mut mixed = 0;
+    for n in nodes {
+        for i in 0..WIDTH {
+            if n.child[i] != wide::EMPTY_SLOT && n.child[i] & wide::LEAF_BIT != 0 {
+                let f = (n.child[i] & !wide::LEAF_BIT) as usize;
+                let run = &refs[f..f + n.count[i] as usize];
+                mixed += (run.iter().any(|&p| p < nt) && run.iter().any(|&p| p >= nt)) as usize;
+            }
+        }
+    }
+    mixed
+}
+
+/// Reading ahead changes no answer and no count: every ray's hit, any-hit
+/// answer and statistics are the same with it on and off, on a scene of
+/// triangles, spheres and cones at every leaf size. By default a
+/// hierarchy reads ahead exactly when its nodes and corner blocks pass
+/// `READ_AHEAD_BYTES`.
+#[test]
+fn reading_ahead_changes_no_answer() {
+    let mut rng = Rng(47);
+    let o = random_scene(&mut rng, 700, 150, 150, 8.0);
+    let scene = o.scene();
+    let rays = rays_with_parallels(&mut rng, &scene, 1500, 8.0);
+    for leaf in [1, 4] {
+        let owned = OwnedWide::new(&scene, leaf).unwrap();
+        let w = owned.view(scene).unwrap();
+        assert!(!w.read_ahead(), "a small hierarchy reads ahead");
+        let (on, off) = (w.with_read_ahead(true), w.with_read_ahead(false));
+        assert!(on.read_ahead() && !off.read_ahead());
+        let mut stk = stack::<WideStackItem>(w.stack_len());
+        let (mut st_on, mut st_off) = (TraceStats::default(), TraceStats::default());
+        let mut hits = 0;
+        for (i, r) in rays.iter().enumerate() {
+            let a = on.intersect(r, &mut stk, &mut st_on);
+            let b = off.intersect(r, &mut stk, &mut st_off);
+            assert!(
+                identical(&a, &b),
+                "leaf {leaf} ray {i}: {a:?} against {b:?}"
+            );
+            assert_eq!(
+                on.occluded(r, &mut stk, &mut st_on),
+                off.occluded(r, &mut stk, &mut st_off),
+                "leaf {leaf} ray {i}"
+            );
+            hits += a.is_hit() as usize;
+        }
+        assert!(hits > 500, "leaf {leaf}: {hits} hits");
+        assert_eq!(st_on, st_off, "leaf {leaf}");
+    }
+    // The default follows the bytes: a view over more nodes than
+    // `READ_AHEAD_BYTES` hold reads ahead, one over exactly that many not.
+    let per = core::mem::size_of::<WideNode>();
+    for (count, reads) in [
+        (wide::READ_AHEAD_BYTES / per, false),
+        (wide::READ_AHEAD_BYTES / per + 1, true),
+    ] {
+        let nodes = vec![WideNode::default(); count];
+        let info = wide::WideInfo {
+            node_count: count as u32,
+            ..Default::default()
+        };
+        let w = WideBvh::from_parts(Scene::default(), &nodes, &[], &[], info).unwrap();
+        assert_eq!(w.read_ahead(), reads, "{count} nodes");
     }
 }
 

@@ -61,8 +61,8 @@ fn block_hit(block: &Corners4, h4: &Hits4, lane: usize, prim: u32) -> Hit {
     }
 }
 
-/// Lanes of `block` that hold a triangle (the others hold NaN): a
-/// leaf of spheres or cones skips its blocks for one compare.
+/// Lanes of `block` that hold a triangle (the others hold NaN, and name a
+/// sphere, a cone or no reference).
 #[inline(always)]
 fn triangle_lanes(block: &Corners4) -> u32 {
     let x = &block[0][0];
@@ -83,22 +83,48 @@ fn block_runs(first: usize, count: usize) -> impl Iterator<Item = (usize, u32)> 
     })
 }
 
-/// The blocks of [`block_runs`] that hold a triangle among the run's
-/// lanes, as (block index, block, those lanes); `None` for a block past
-/// `blocks` (corrupt input).
+/// One block of a run: its index, the block (`None` past `blocks`:
+/// corrupt input when the run's slots there name a triangle), the run's
+/// lanes in it and those of them that hold a triangle. A leaf's other
+/// slots are its spheres and cones: the block's NaN lanes say which, so a
+/// leaf of triangles alone never reads its references unless it is hit.
 #[inline(always)]
-fn triangle_blocks(
+fn run_blocks(
     blocks: &[Corners4],
     first: usize,
     count: usize,
-) -> impl Iterator<Item = Option<(usize, &Corners4, u32)>> {
-    block_runs(first, count).filter_map(move |(b, lanes)| match blocks.get(b) {
-        None => Some(None),
-        Some(block) => {
-            let lanes = lanes & triangle_lanes(block);
-            (lanes != 0).then_some(Some((b, block, lanes)))
-        }
+) -> impl Iterator<Item = (usize, Option<&Corners4>, u32, u32)> {
+    block_runs(first, count).map(move |(b, lanes)| {
+        let block = blocks.get(b);
+        let triangles = block.map_or(0, |block| lanes & triangle_lanes(block));
+        (b, block, lanes, triangles)
     })
+}
+
+/// The primitives of the lanes of block `b` that hold no triangle
+/// (`lanes & !triangles`), in turn, each `f`'s `Some` stopping the loop;
+/// `Err` for a slot past its block that names a triangle (corrupt input).
+/// Slots of a block that name a triangle in a NaN lane are not tested
+/// (their block says there is nothing).
+#[inline(always)]
+fn for_others<T>(
+    scene: &Scene,
+    refs: &[u32],
+    (b, block, lanes, triangles): (usize, Option<&Corners4>, u32, u32),
+    mut f: impl FnMut(usize) -> Option<T>,
+) -> Result<Option<T>, ()> {
+    let nt = scene.triangles.len();
+    for lane in lanes_of(lanes & !triangles) {
+        let p = refs[b * TRI_LANES + lane] as usize;
+        if p >= nt {
+            if let Some(x) = f(p) {
+                return Ok(Some(x));
+            }
+        } else if block.is_none() {
+            return Err(());
+        }
+    }
+    Ok(None)
 }
 
 /// References `refs[first..first + count]`, or `None` past `refs`.
@@ -114,9 +140,11 @@ fn run_of(refs: &[u32], first: usize, count: usize) -> Option<&[u32]> {
 /// `[r.t_min, r.t_max]`, kept in `best`. Their triangles' corners lie in
 /// `blocks` (slot `s` in lane `s % 4` of block `s / 4`, NaN where the slot
 /// is no triangle); spheres and cones among them are tested one at a time
-/// when `others` (the scene has any), and a run without a triangle does
-/// not touch its blocks. Returns false when a slot or block lies past its
-/// slice (corrupt input), having tested what lay within.
+/// when `others` (the scene has any): the slots of NaN lanes and those past
+/// the blocks (where runs without a triangle lie), so a run of triangles
+/// alone reads its references only for the triangles it hits. Returns
+/// false when a slot or block lies past its slice, or a slot past the
+/// blocks names a triangle (corrupt input), having tested what lay before.
 #[inline(never)]
 pub(crate) fn closest_in_blocks(
     scene: &Scene,
@@ -127,27 +155,29 @@ pub(crate) fn closest_in_blocks(
     others: bool,
     best: &mut Hit,
 ) -> bool {
-    let Some(run) = run_of(refs, first, count) else {
+    if run_of(refs, first, count).is_none() {
         return false;
-    };
+    }
     let limit = |best: &Hit| if best.is_hit() { best.t } else { r.t_max };
-    let mut triangles = !others;
-    if others {
-        let nt = scene.triangles.len();
-        for &p in run {
-            if (p as usize) < nt {
-                triangles = true;
-            } else if let Some(h) = scene.intersect_prim(p as usize, r, limit(best)) {
-                keep(best, h);
+    for part in run_blocks(blocks, first, count) {
+        if others {
+            let found = for_others(scene, refs, part, |p| {
+                if let Some(h) = scene.intersect_prim(p, r, limit(best)) {
+                    keep(best, h);
+                }
+                None::<()>
+            });
+            if found.is_err() {
+                return false;
             }
         }
-    }
-    if !triangles {
-        return true;
-    }
-    for found in triangle_blocks(blocks, first, count) {
-        let Some((b, block, lanes)) = found else {
-            return false;
+        let (b, block, lanes) = match part {
+            // Past the blocks: spheres and cones, or (a triangle there, or
+            // a scene of triangles alone) corrupt input.
+            (_, None, _, _) if others => continue,
+            (_, None, _, _) => return false,
+            (_, Some(_), _, 0) => continue,
+            (b, Some(block), _, lanes) => (b, block, lanes),
         };
         let t_max = limit(best);
         let h4 = intersect_triangles4(r, block, t_max);
@@ -180,23 +210,20 @@ pub(crate) fn any_in_blocks(
     others: bool,
     t_max: f32,
 ) -> Option<bool> {
-    let run = run_of(refs, first, count)?;
-    let mut triangles = !others;
-    if others {
-        let nt = scene.triangles.len();
-        for &p in run {
-            if (p as usize) < nt {
-                triangles = true;
-            } else if scene.intersect_prim(p as usize, r, t_max).is_some() {
+    run_of(refs, first, count)?;
+    for part in run_blocks(blocks, first, count) {
+        if others {
+            let hit = |p: usize| scene.intersect_prim(p, r, t_max).map(|_| ());
+            if for_others(scene, refs, part, hit).ok()?.is_some() {
                 return Some(true);
             }
         }
-    }
-    if !triangles {
-        return Some(false);
-    }
-    for found in triangle_blocks(blocks, first, count) {
-        let (b, block, lanes) = found?;
+        let (b, block, lanes) = match part {
+            (_, None, _, _) if others => continue,
+            (_, None, _, _) => return None,
+            (_, Some(_), _, 0) => continue,
+            (b, Some(block), _, lanes) => (b, block, lanes),
+        };
         let h4 = intersect_triangles4(r, block, t_max);
         let edge_hit = |lane: usize| {
             let prim = refs[b * TRI_LANES + lane] as usize;

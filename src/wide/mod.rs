@@ -26,7 +26,7 @@ mod traverse;
 mod validate;
 
 pub use node::{WideNode, EMPTY_SLOT, LEAF_BIT, WIDTH};
-pub use traverse::WideStackItem;
+pub use traverse::{WideStackItem, READ_AHEAD_BYTES};
 
 use crate::bvh::{self, BvhNode, BvhScratch, BvhStorage};
 use crate::geom::{Aabb, Corners4, Scene};
@@ -127,6 +127,8 @@ pub struct WideBvh<'a> {
     pub(crate) refs: &'a [u32],
     pub(crate) corners: &'a [Corners4],
     pub(crate) info: WideInfo,
+    /// Whether walks read ahead (see [`WideBvh::with_read_ahead`]).
+    pub(crate) read_ahead: bool,
 }
 
 /// A traversal step's cost in primitive tests, for the binary build's
@@ -218,12 +220,14 @@ pub fn build<'a>(
         ref_digest: binary.ref_digest,
         corner_blocks: corners.len() as u32,
     };
+    let nodes = &nodes[..collapsed.nodes];
     Ok(WideBvh {
         scene: *scene,
-        nodes: &nodes[..collapsed.nodes],
+        nodes,
         refs,
         corners,
         info,
+        read_ahead: traverse::reads_ahead(nodes, corners),
     })
 }
 
@@ -250,13 +254,38 @@ impl<'a> WideBvh<'a> {
         {
             return Err(Error::Corrupt { what: "counts" });
         }
+        let (nodes, corners) = (
+            &nodes[..i.node_count as usize],
+            &corners[..i.corner_blocks as usize],
+        );
         Ok(WideBvh {
             scene,
-            nodes: &nodes[..i.node_count as usize],
+            nodes,
             refs: &refs[..i.ref_count as usize],
-            corners: &corners[..i.corner_blocks as usize],
+            corners,
             info,
+            read_ahead: traverse::reads_ahead(nodes, corners),
         })
+    }
+
+    /// This hierarchy with its walks reading ahead (`true`) or not: when a
+    /// node sends the ray on to several entries, the farther ones, which
+    /// wait on the stack, are read once (a word of each cache line of the
+    /// node or of the leaf's first corner block) so that their memory is
+    /// on its way while the nearest is walked. It pays when the hierarchy
+    /// lives beyond the core's own caches and costs a few percent when it
+    /// does not; the default is on above [`READ_AHEAD_BYTES`] of nodes
+    /// and corner blocks. The answers are the same either way.
+    pub fn with_read_ahead(self, on: bool) -> WideBvh<'a> {
+        WideBvh {
+            read_ahead: on,
+            ..self
+        }
+    }
+
+    /// Whether walks read ahead (see [`WideBvh::with_read_ahead`]).
+    pub fn read_ahead(&self) -> bool {
+        self.read_ahead
     }
 
     /// Shape, counts and digest.
