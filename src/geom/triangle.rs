@@ -1,5 +1,5 @@
 use super::{Aabb, PreparedRay};
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 
 /// Watertight ray-triangle test (Woop, Benthin and Wald, JCGT 2013): no ray
 /// slips between two triangles that share an edge. Both sides are hit.
@@ -83,63 +83,47 @@ pub struct Hits4 {
 /// [`Hits4::edge`] for it to decide.
 #[inline(always)]
 pub fn intersect_triangles4(r: &PreparedRay, c: &Corners4, t_max: f32) -> Hits4 {
-    const L: usize = TRI_LANES;
+    // glam's `Vec4` is four SSE2 lanes (NEON, wasm SIMD, or scalar
+    // elsewhere): each step below is one vector instruction, in the
+    // one-triangle test's order of operations (no fused multiply-add), so
+    // each lane's bits are that test's.
     let o = r.origin.to_array();
     let (kx, ky, kz) = (r.kx, r.ky, r.kz);
-    // Corners relative to the origin, sheared: x, y, and z (scaled).
-    let mut x = [[0.0f32; L]; 3];
-    let mut y = [[0.0f32; L]; 3];
-    let mut z = [[0.0f32; L]; 3];
-    for k in 0..3 {
-        let (cx, cy, cz) = (&c[k][kx], &c[k][ky], &c[k][kz]);
-        for i in 0..L {
-            let az = cz[i] - o[kz];
-            x[k][i] = (cx[i] - o[kx]) - r.sx * az;
-            y[k][i] = (cy[i] - o[ky]) - r.sy * az;
-            z[k][i] = r.sz * az;
-        }
-    }
-    // Each step a loop over the lanes on its own, so each is one vector
-    // instruction (the masks too: all bits set or clear per lane).
-    let (mut u, mut v, mut w) = ([0.0f32; L], [0.0f32; L], [0.0f32; L]);
-    for i in 0..L {
-        let (ax, ay, bx, by, cx, cy) = (x[0][i], y[0][i], x[1][i], y[1][i], x[2][i], y[2][i]);
-        u[i] = cx * by - cy * bx;
-        v[i] = ax * cy - ay * cx;
-        w[i] = bx * ay - by * ax;
-    }
-    let (mut t, mut u_out, mut v_out) = ([0.0f32; L], [0.0f32; L], [0.0f32; L]);
-    let mut det = [0.0f32; L];
-    for i in 0..L {
-        det[i] = u[i] + v[i] + w[i];
-        let t_scaled = u[i] * z[0][i] + v[i] * z[1][i] + w[i] * z[2][i];
-        let inv_det = 1.0 / det[i];
-        t[i] = t_scaled * inv_det;
-        u_out[i] = v[i] * inv_det;
-        v_out[i] = w[i] * inv_det;
-    }
-    let mask = |c: bool| if c { u32::MAX } else { 0 };
-    let (mut hit_lanes, mut edge_lanes) = ([0u32; L], [0u32; L]);
-    for i in 0..L {
-        let on_edge = mask(u[i] == 0.0) | mask(v[i] == 0.0) | mask(w[i] == 0.0);
-        let neg = mask(u[i] < 0.0) | mask(v[i] < 0.0) | mask(w[i] < 0.0);
-        let pos = mask(u[i] > 0.0) | mask(v[i] > 0.0) | mask(w[i] > 0.0);
-        // As the one-triangle test: no zero or NaN determinant.
-        let valid = mask(det[i] != 0.0)
-            & mask(!det[i].is_nan())
-            & mask(t[i] >= r.t_min)
-            & mask(t[i] <= t_max);
-        hit_lanes[i] = !on_edge & !(neg & pos) & valid;
-        edge_lanes[i] = on_edge;
-    }
-    let bits = |m: [u32; L]| (0..L).fold(0, |b, i| b | (m[i] & 1) << i);
-    let (hit, edge) = (bits(hit_lanes), bits(edge_lanes));
+    let (ox, oy, oz) = (Vec4::splat(o[kx]), Vec4::splat(o[ky]), Vec4::splat(o[kz]));
+    let (sx, sy, sz) = (Vec4::splat(r.sx), Vec4::splat(r.sy), Vec4::splat(r.sz));
+    // Corner `k` relative to the origin, sheared: x, y, and z (scaled).
+    let corner = |k: usize| {
+        let lanes = |axis: usize| Vec4::from_array(c[k][axis]);
+        let az = lanes(kz) - oz;
+        (
+            (lanes(kx) - ox) - sx * az,
+            (lanes(ky) - oy) - sy * az,
+            sz * az,
+        )
+    };
+    let ((ax, ay, az), (bx, by, bz), (cx, cy, cz)) = (corner(0), corner(1), corner(2));
+    let u = cx * by - cy * bx;
+    let v = ax * cy - ay * cx;
+    let w = bx * ay - by * ax;
+    let det = u + v + w;
+    let t_scaled = u * az + v * bz + w * cz;
+    let inv_det = Vec4::ONE / det;
+    let t = t_scaled * inv_det;
+    let zero = Vec4::ZERO;
+    let on_edge = u.cmpeq(zero) | v.cmpeq(zero) | w.cmpeq(zero);
+    let neg = u.cmplt(zero) | v.cmplt(zero) | w.cmplt(zero);
+    let pos = u.cmpgt(zero) | v.cmpgt(zero) | w.cmpgt(zero);
+    // As the one-triangle test: no zero or NaN determinant.
+    let valid = det.cmpne(zero)
+        & det.cmpeq(det)
+        & t.cmpge(Vec4::splat(r.t_min))
+        & t.cmple(Vec4::splat(t_max));
     Hits4 {
-        hit,
-        edge,
-        t,
-        u: u_out,
-        v: v_out,
+        hit: (!on_edge & !(neg & pos) & valid).bitmask(),
+        edge: on_edge.bitmask(),
+        t: t.to_array(),
+        u: (v * inv_det).to_array(),
+        v: (w * inv_det).to_array(),
     }
 }
 
