@@ -127,6 +127,23 @@ fn for_others<T>(
     Ok(None)
 }
 
+/// The triangle test one block of a run asks for: (block index, block,
+/// triangle lanes), `Ok(None)` for none, `Err` for a block past `blocks`
+/// in a scene of triangles alone (corrupt input; with spheres or cones,
+/// [`for_others`] has judged those slots).
+#[inline(always)]
+fn triangle_part(
+    (b, block, _, triangles): (usize, Option<&Corners4>, u32, u32),
+    others: bool,
+) -> Result<Option<(usize, &Corners4, u32)>, ()> {
+    match block {
+        None if others => Ok(None),
+        None => Err(()),
+        Some(_) if triangles == 0 => Ok(None),
+        Some(block) => Ok(Some((b, block, triangles))),
+    }
+}
+
 /// References `refs[first..first + count]`, or `None` past `refs`.
 #[inline(always)]
 fn run_of(refs: &[u32], first: usize, count: usize) -> Option<&[u32]> {
@@ -171,13 +188,10 @@ pub(crate) fn closest_in_blocks(
                 return false;
             }
         }
-        let (b, block, lanes) = match part {
-            // Past the blocks: spheres and cones, or (a triangle there, or
-            // a scene of triangles alone) corrupt input.
-            (_, None, _, _) if others => continue,
-            (_, None, _, _) => return false,
-            (_, Some(_), _, 0) => continue,
-            (b, Some(block), _, lanes) => (b, block, lanes),
+        let (b, block, lanes) = match triangle_part(part, others) {
+            Ok(Some(test)) => test,
+            Ok(None) => continue,
+            Err(()) => return false,
         };
         let t_max = limit(best);
         let h4 = intersect_triangles4(r, block, t_max);
@@ -218,11 +232,8 @@ pub(crate) fn any_in_blocks(
                 return Some(true);
             }
         }
-        let (b, block, lanes) = match part {
-            (_, None, _, _) if others => continue,
-            (_, None, _, _) => return None,
-            (_, Some(_), _, 0) => continue,
-            (b, Some(block), _, lanes) => (b, block, lanes),
+        let Some((b, block, lanes)) = triangle_part(part, others).ok()? else {
+            continue;
         };
         let h4 = intersect_triangles4(r, block, t_max);
         let edge_hit = |lane: usize| {
