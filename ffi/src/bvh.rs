@@ -1009,9 +1009,14 @@ pub unsafe extern "C" fn coray_bvh_tracer_intersect1(
         // SAFETY: forwarded caller contract.
         unsafe {
             let binding = tracer::binding(tracer, Some(KIND_BVH))?;
-            traced(tracer, binding, ray, hit, |x, r, s, st| {
-                x.intersect(r, s, st).into()
-            })
+            traced(
+                tracer,
+                binding,
+                ray,
+                hit,
+                #[inline(always)]
+                |x, r, s, st| x.intersect(r, s, st).into(),
+            )
         }
     })
 }
@@ -1032,9 +1037,14 @@ pub unsafe extern "C" fn coray_bvh_tracer_occluded1(
         // SAFETY: forwarded caller contract.
         unsafe {
             let binding = tracer::binding(tracer, Some(KIND_BVH))?;
-            traced(tracer, binding, ray, occluded, |x, r, s, st| {
-                x.occluded(r, s, st) as u8
-            })
+            traced(
+                tracer,
+                binding,
+                ray,
+                occluded,
+                #[inline(always)]
+                |x, r, s, st| x.occluded(r, s, st) as u8,
+            )
         }
     })
 }

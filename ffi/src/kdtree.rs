@@ -968,9 +968,14 @@ pub unsafe extern "C" fn coray_kdtree_tracer_intersect1(
         // SAFETY: forwarded caller contract.
         unsafe {
             let binding = tracer::binding(tracer, Some(KIND_KD))?;
-            traced(tracer, binding, ray, hit, |t, r, m, s, st| {
-                KdTree::intersect(t, r, m, s, st).into()
-            })
+            traced(
+                tracer,
+                binding,
+                ray,
+                hit,
+                #[inline(always)]
+                |t, r, m, s, st| KdTree::intersect(t, r, m, s, st).into(),
+            )
         }
     })
 }
@@ -991,9 +996,14 @@ pub unsafe extern "C" fn coray_kdtree_tracer_occluded1(
         // SAFETY: forwarded caller contract.
         unsafe {
             let binding = tracer::binding(tracer, Some(KIND_KD))?;
-            traced(tracer, binding, ray, occluded, |t, r, m, s, st| {
-                KdTree::occluded(t, r, m, s, st) as u8
-            })
+            traced(
+                tracer,
+                binding,
+                ray,
+                occluded,
+                #[inline(always)]
+                |t, r, m, s, st| KdTree::occluded(t, r, m, s, st) as u8,
+            )
         }
     })
 }

@@ -1026,9 +1026,14 @@ pub unsafe extern "C" fn coray_proj_tracer_intersect1(
         // SAFETY: forwarded caller contract.
         unsafe {
             let binding = tracer::binding(tracer, Some(KIND_PROJ))?;
-            traced(tracer, binding, ray, hit, |p, r, sc, s, st| {
-                p.intersect(r, sc, s, st).map(Into::into)
-            })
+            traced(
+                tracer,
+                binding,
+                ray,
+                hit,
+                #[inline(always)]
+                |p, r, sc, s, st| p.intersect(r, sc, s, st).map(Into::into),
+            )
         }
     })
 }
@@ -1049,9 +1054,14 @@ pub unsafe extern "C" fn coray_proj_tracer_occluded1(
         // SAFETY: forwarded caller contract.
         unsafe {
             let binding = tracer::binding(tracer, Some(KIND_PROJ))?;
-            traced(tracer, binding, ray, occluded, |p, r, sc, s, st| {
-                p.occluded(r, sc, s, st).map(u8::from)
-            })
+            traced(
+                tracer,
+                binding,
+                ray,
+                occluded,
+                #[inline(always)]
+                |p, r, sc, s, st| p.occluded(r, sc, s, st).map(u8::from),
+            )
         }
     })
 }

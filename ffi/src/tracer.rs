@@ -263,7 +263,10 @@ pub(crate) unsafe fn trace<'a, S, I: Plain, O>(
     let apart = r + rb <= o || o + ob <= r;
     // (Null and alignment were checked just above.)
     let placed = lies_in(o, ob, b.out) && lies_in(r, rb, b.ray);
-    if !(apart && placed) {
+    // Whether the binding's ranges (and so its check word) change: known
+    // here, not by comparing the words after (a memcmp call a trace).
+    let moved = !(apart && placed);
+    if moved {
         let [handle_words, arena] = h.spans();
         let [vertices, triangles, spheres, cones] = Span::of_scene(&scene);
         let stack = Span::of(b.stack as *const u8, b.stack_bytes);
@@ -291,7 +294,6 @@ pub(crate) unsafe fn trace<'a, S, I: Plain, O>(
         b.ray = Span::gap_around(r, rb, &[stack, own]);
         b.check = b.check_of(tracer as usize);
     }
-    let moved = b != binding;
     // SAFETY: the arena's header and parts passed `view`'s checks when the
     // tracer was made and are unchanged (contract).
     let s = view(h, scene)?;

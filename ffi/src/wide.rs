@@ -690,9 +690,14 @@ pub unsafe extern "C" fn coray_wide_tracer_intersect1(
         // SAFETY: forwarded caller contract.
         unsafe {
             let binding = tracer::binding(tracer, Some(KIND_WIDE))?;
-            traced(tracer, binding, ray, hit, |x, r, s, st| {
-                x.intersect(r, s, st).into()
-            })
+            traced(
+                tracer,
+                binding,
+                ray,
+                hit,
+                #[inline(always)]
+                |x, r, s, st| x.intersect(r, s, st).into(),
+            )
         }
     })
 }
@@ -713,9 +718,14 @@ pub unsafe extern "C" fn coray_wide_tracer_occluded1(
         // SAFETY: forwarded caller contract.
         unsafe {
             let binding = tracer::binding(tracer, Some(KIND_WIDE))?;
-            traced(tracer, binding, ray, occluded, |x, r, s, st| {
-                x.occluded(r, s, st) as u8
-            })
+            traced(
+                tracer,
+                binding,
+                ray,
+                occluded,
+                #[inline(always)]
+                |x, r, s, st| x.occluded(r, s, st) as u8,
+            )
         }
     })
 }
