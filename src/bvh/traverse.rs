@@ -82,7 +82,9 @@ pub(crate) fn box_test(n: &BvhNode, r: &PreparedRay, t_max: f32) -> (Option<f32>
     let (mut t0, mut t1) = (r.t_min, t_max);
     let mut cost = 0;
     for a in 0..3 {
-        if r.dir[a] == 0.0 {
+        // Zero or so small that its inverse overflows: parallel, as the
+        // kd-tree's clip takes it (`(face - origin) * inf` is NaN on a face).
+        if r.inv_dir[a].is_infinite() {
             cost += BOX_PARALLEL_COST;
             if r.origin[a] < n.min[a] || r.origin[a] > n.max[a] {
                 return (None, cost);

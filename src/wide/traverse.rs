@@ -4,10 +4,11 @@
 //! corner blocks and its spheres and cones one at a time, with the
 //! kd-tree's tests and tie rule, so the hits are the kd-tree's bit for bit.
 //!
-//! The box test is chosen once per ray: rays with no zero direction
-//! component take the plain slab test; the others take one that decides
-//! their parallel axes by the origin (on a face counts as inside), as
-//! `1 / 0` would turn `0 * inf` into NaN there. Whether a walk reads
+//! The box test is chosen once per ray: rays whose inverse direction is
+//! finite take the plain slab test; the others (a zero component, or a
+//! subnormal one whose inverse overflows) take one that decides those
+//! axes by the origin (on a face counts as inside), as the kd-tree's clip
+//! does, since `0 * inf` would be NaN on a face. Whether a walk reads
 //! ahead the entries it leaves on the stack is the hierarchy's
 //! ([`WideBvh::with_read_ahead`]), also chosen once per ray.
 
@@ -115,7 +116,8 @@ impl Query for Any {
 struct Slabs {
     origin: [f32; 3],
     inv_dir: [f32; 3],
-    /// Axes the ray is parallel to.
+    /// Axes the ray is taken as parallel to: those whose inverse direction
+    /// is infinite, as the kd-tree's clip takes them (`Aabb::clip_ray`).
     parallel: [bool; 3],
 }
 
@@ -124,7 +126,9 @@ impl Slabs {
         Slabs {
             origin: r.origin.to_array(),
             inv_dir: r.inv_dir.to_array(),
-            parallel: [r.dir.x == 0.0, r.dir.y == 0.0, r.dir.z == 0.0],
+            // A zero component, or one so small that its inverse
+            // overflows: `(face - origin) * inf` is NaN on a face.
+            parallel: r.inv_dir.to_array().map(f32::is_infinite),
         }
     }
 

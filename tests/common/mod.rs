@@ -178,3 +178,43 @@ pub fn global_prim(s: &Scene, h: &coray::Hit) -> u32 {
         _ => u32::MAX,
     }
 }
+
+/// A unit cube of quads (two triangles a face) with a smaller cube of
+/// quads inside it, and rays started on the faces and edges of their boxes
+/// (coordinates -1, -0.5, 0.5, 1, and 0.25 within faces) whose directions
+/// have one or two components of subnormal size (their inverses overflow
+/// to infinity) beside normal ones.
+pub fn faces_and_tiny_directions() -> (OwnedScene, Vec<Ray>) {
+    let mut o = OwnedScene::default();
+    for (lo, hi) in [(-1.0f32, 1.0f32), (-0.5, 0.5)] {
+        for axis in 0..3 {
+            for pos in [lo, hi] {
+                o.add_quad(axis, pos, [lo, lo], [hi, hi]);
+            }
+        }
+    }
+    let coords = [-1.0f32, -0.5, 0.25, 0.5, 1.0];
+    let tiny = [1e-40f32, -1e-40, 3e-39, -2e-45];
+    let mut rays = Vec::new();
+    for (i, &x) in coords.iter().enumerate() {
+        for (j, &y) in coords.iter().enumerate() {
+            let z = coords[(i + 2 * j) % coords.len()];
+            for (k, &t) in tiny.iter().enumerate() {
+                for axis in 0..3 {
+                    let mut d = [0.3f32 + 0.1 * k as f32, -0.7, 0.6 - 0.2 * j as f32];
+                    d[axis] = t;
+                    if k % 2 == 1 {
+                        d[(axis + 1) % 3] = -t;
+                    }
+                    rays.push(Ray::new(
+                        Vec3::new(x, y, z),
+                        Vec3::from_array(d),
+                        0.0,
+                        f32::INFINITY,
+                    ));
+                }
+            }
+        }
+    }
+    (o, rays)
+}
