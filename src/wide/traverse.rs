@@ -221,6 +221,8 @@ impl WideBvh<'_> {
         stats: &mut TraceStats,
     ) {
         let slabs = Slabs::new(r);
+        // Rays with a parallel axis are rare: they walk without reading
+        // ahead (one copy of the walk fewer).
         match (slabs.parallel.iter().any(|&p| p), self.read_ahead) {
             (true, _) => self.walk_with::<Q, true, false>(r, &slabs, q, stack, stats),
             (false, false) => self.walk_with::<Q, false, false>(r, &slabs, q, stack, stats),
