@@ -7,7 +7,7 @@ use crate::abi::*;
 use crate::carve::{self, check_arena, Out, OutValue, Regions, Versioned};
 use crate::handle::{self, Handle, Sealed, KIND_BVH};
 use crate::one_ray::one_ray;
-use crate::tracer::{self, Binding, CorayTracer};
+use crate::tracer::{self, CorayTracer};
 use crate::{guard, CorayBvh, CorayStatus};
 use coray::bvh::layout::{
     code, BvhArenaHeader, BvhArenaLayout, BvhScratchLayout, BVH_HEADER_BYTES, BVH_MAGIC,
@@ -964,7 +964,6 @@ pub unsafe extern "C" fn coray_bvh_tracer(
 #[inline(always)]
 unsafe fn traced<O>(
     tracer: *mut CorayTracer,
-    binding: Binding,
     ray: *const CorayRay,
     out: *mut O,
     answer: impl FnOnce(&Bvh, &coray::Ray, &mut [BvhStackItem], &mut TraceStats) -> O,
@@ -973,7 +972,7 @@ unsafe fn traced<O>(
     unsafe {
         tracer::trace(
             tracer,
-            binding,
+            KIND_BVH,
             #[inline(always)]
             |h, s| Ok(view_of(h, s)?.1),
             #[inline(always)]
@@ -1008,10 +1007,8 @@ pub unsafe extern "C" fn coray_bvh_tracer_intersect1(
     guard(|| {
         // SAFETY: forwarded caller contract.
         unsafe {
-            let binding = tracer::binding(tracer, Some(KIND_BVH))?;
             traced(
                 tracer,
-                binding,
                 ray,
                 hit,
                 #[inline(always)]
@@ -1036,10 +1033,8 @@ pub unsafe extern "C" fn coray_bvh_tracer_occluded1(
     guard(|| {
         // SAFETY: forwarded caller contract.
         unsafe {
-            let binding = tracer::binding(tracer, Some(KIND_BVH))?;
             traced(
                 tracer,
-                binding,
                 ray,
                 occluded,
                 #[inline(always)]

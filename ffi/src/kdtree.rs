@@ -6,7 +6,7 @@ use crate::abi::*;
 use crate::carve::{self, check_arena, Out, OutValue, Regions, Versioned};
 use crate::handle::{self, Handle, Sealed, KIND_KD};
 use crate::one_ray::one_ray;
-use crate::tracer::{self, Binding, CorayTracer};
+use crate::tracer::{self, CorayTracer};
 use crate::{guard, CorayKdRunJobs, CorayKdTree, CorayStatus};
 use coray::kd::layout::{KdArenaHeader, KdArenaLayout, KdScratchLayout, KD_HEADER_BYTES};
 use coray::kd::{
@@ -923,7 +923,6 @@ pub unsafe extern "C" fn coray_kdtree_tracer(
 #[inline(always)]
 unsafe fn traced<O>(
     tracer: *mut CorayTracer,
-    binding: Binding,
     ray: *const CorayRay,
     out: *mut O,
     answer: impl FnOnce(&KdTree, &coray::Ray, Traversal, &mut [KdStackItem], &mut TraceStats) -> O,
@@ -932,7 +931,7 @@ unsafe fn traced<O>(
     unsafe {
         tracer::trace(
             tracer,
-            binding,
+            KIND_KD,
             #[inline(always)]
             |h, s| Ok(known_tree_of(h, s)),
             #[inline(always)]
@@ -967,10 +966,8 @@ pub unsafe extern "C" fn coray_kdtree_tracer_intersect1(
     guard(|| {
         // SAFETY: forwarded caller contract.
         unsafe {
-            let binding = tracer::binding(tracer, Some(KIND_KD))?;
             traced(
                 tracer,
-                binding,
                 ray,
                 hit,
                 #[inline(always)]
@@ -995,10 +992,8 @@ pub unsafe extern "C" fn coray_kdtree_tracer_occluded1(
     guard(|| {
         // SAFETY: forwarded caller contract.
         unsafe {
-            let binding = tracer::binding(tracer, Some(KIND_KD))?;
             traced(
                 tracer,
-                binding,
                 ray,
                 occluded,
                 #[inline(always)]

@@ -9,7 +9,7 @@ use crate::carve::{self, check_arena, Out, OutValue, Regions, Versioned};
 use crate::cast::{camera, CorayCamera};
 use crate::handle::{self, Handle, Sealed, KIND_PROJ};
 use crate::one_ray::one_ray;
-use crate::tracer::{self, Binding, CorayTracer};
+use crate::tracer::{self, CorayTracer};
 use crate::{guard, CorayProj, CorayStatus};
 use coray::bvh::layout::code;
 use coray::bvh::{Bvh, BvhNode, BvhScratch, BvhStackItem};
@@ -968,7 +968,6 @@ pub unsafe extern "C" fn coray_proj_tracer(
 #[inline(always)]
 unsafe fn traced<O>(
     tracer: *mut CorayTracer,
-    binding: Binding,
     ray: *const CorayRay,
     out: *mut O,
     answer: impl FnOnce(
@@ -983,7 +982,7 @@ unsafe fn traced<O>(
     unsafe {
         tracer::trace(
             tracer,
-            binding,
+            KIND_PROJ,
             #[inline(always)]
             |h, s| Ok(view_of(h, s)?.1),
             #[inline(always)]
@@ -1025,10 +1024,8 @@ pub unsafe extern "C" fn coray_proj_tracer_intersect1(
     guard(|| {
         // SAFETY: forwarded caller contract.
         unsafe {
-            let binding = tracer::binding(tracer, Some(KIND_PROJ))?;
             traced(
                 tracer,
-                binding,
                 ray,
                 hit,
                 #[inline(always)]
@@ -1053,10 +1050,8 @@ pub unsafe extern "C" fn coray_proj_tracer_occluded1(
     guard(|| {
         // SAFETY: forwarded caller contract.
         unsafe {
-            let binding = tracer::binding(tracer, Some(KIND_PROJ))?;
             traced(
                 tracer,
-                binding,
                 ray,
                 occluded,
                 #[inline(always)]

@@ -43,8 +43,8 @@ const _: () = assert!(TOTALS_AT + size_of::<TraceStats>() / 8 <= 32);
 const _: () = assert!(size_of::<TraceStats>() == 11 * 8 && align_of::<TraceStats>() == 8);
 
 /// What a tracer's make call checked, as its words keep it.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub(crate) struct Binding {
+#[derive(Clone, Copy, Debug, Default)]
+struct Binding {
     /// [`Binding::check_of`] over the rest and the tracer's address.
     check: u64,
     /// The handle's kind.
@@ -200,7 +200,7 @@ pub(crate) unsafe fn make<'a, S, I: Plain>(
 /// # Safety
 /// `tracer` is NULL or readable.
 #[inline(always)]
-pub(crate) unsafe fn binding(
+unsafe fn binding(
     tracer: *const CorayTracer,
     kind: Option<u64>,
 ) -> Result<Binding, CorayStatus> {
@@ -217,9 +217,8 @@ pub(crate) unsafe fn binding(
 /// Traces `ray` with the tracer at `tracer` (of `kind`) and writes the
 /// answer to `out`; adds the call's statistics to the tracer's.
 ///
-/// `binding` is the tracer's, of this family ([`binding`] checked it). In
-/// order: its handle's seal
-/// word (unchanged since the make call), the ray and `out` (null,
+/// In order: the tracer ([`binding`]: null, alignment, check word, of
+/// `kind`), its handle's seal word (unchanged since the make call), the ray and `out` (null,
 /// alignment), then neither may overlap a buffer the call writes (stack,
 /// tracer, each other) nor `out` one it reads (handle, arena, scene
 /// arrays): places inside the ranges the last such check found are taken
@@ -236,14 +235,15 @@ pub(crate) unsafe fn binding(
 #[inline(always)]
 pub(crate) unsafe fn trace<'a, S, I: Plain, O>(
     tracer: *mut CorayTracer,
-    binding: Binding,
+    kind: u64,
     view: impl FnOnce(Sealed<'a>, Scene<'a>) -> Result<S, CorayStatus>,
     stack_len: impl FnOnce(&S) -> usize,
     ray: *const CorayRay,
     out: *mut O,
     answer: impl FnOnce(&S, u64, &coray::Ray, &mut [I], &mut TraceStats) -> Result<O, CorayStatus>,
 ) -> Result<(), CorayStatus> {
-    let mut b = binding;
+    // SAFETY: forwarded contract (`tracer` NULL or readable).
+    let mut b = unsafe { binding(tracer, Some(kind)) }?;
     let handle = b.handle as *const [u64; 32];
     // SAFETY: the make call checked the handle non-null, aligned and
     // sealed; readable by the contract.

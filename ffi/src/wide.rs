@@ -8,7 +8,7 @@ use crate::bvh::{check_scene, scene_counts};
 use crate::carve::{self, check_arena, Out, OutValue, Regions, Versioned};
 use crate::handle::{self, Handle, Sealed, KIND_WIDE};
 use crate::one_ray::one_ray;
-use crate::tracer::{self, Binding, CorayTracer};
+use crate::tracer::{self, CorayTracer};
 use crate::{guard, CorayStatus, CorayWide};
 use coray::bvh::BvhNode;
 use coray::limits::MAX_PRIMS;
@@ -645,7 +645,6 @@ pub unsafe extern "C" fn coray_wide_tracer(
 #[inline(always)]
 unsafe fn traced<O>(
     tracer: *mut CorayTracer,
-    binding: Binding,
     ray: *const CorayRay,
     out: *mut O,
     answer: impl FnOnce(&WideBvh, &coray::Ray, &mut [WideStackItem], &mut TraceStats) -> O,
@@ -654,7 +653,7 @@ unsafe fn traced<O>(
     unsafe {
         tracer::trace(
             tracer,
-            binding,
+            KIND_WIDE,
             #[inline(always)]
             |h, s| Ok(view_of(h, s)?.1),
             #[inline(always)]
@@ -689,10 +688,8 @@ pub unsafe extern "C" fn coray_wide_tracer_intersect1(
     guard(|| {
         // SAFETY: forwarded caller contract.
         unsafe {
-            let binding = tracer::binding(tracer, Some(KIND_WIDE))?;
             traced(
                 tracer,
-                binding,
                 ray,
                 hit,
                 #[inline(always)]
@@ -717,10 +714,8 @@ pub unsafe extern "C" fn coray_wide_tracer_occluded1(
     guard(|| {
         // SAFETY: forwarded caller contract.
         unsafe {
-            let binding = tracer::binding(tracer, Some(KIND_WIDE))?;
             traced(
                 tracer,
-                binding,
                 ray,
                 occluded,
                 #[inline(always)]
