@@ -200,10 +200,7 @@ pub(crate) unsafe fn make<'a, S, I: Plain>(
 /// # Safety
 /// `tracer` is NULL or readable.
 #[inline(always)]
-unsafe fn binding(
-    tracer: *const CorayTracer,
-    kind: Option<u64>,
-) -> Result<Binding, CorayStatus> {
+unsafe fn binding(tracer: *const CorayTracer, kind: Option<u64>) -> Result<Binding, CorayStatus> {
     carve::check_array(tracer, 1)?;
     // SAFETY: non-null and aligned (checked), readable by the contract;
     // read by value, nothing kept borrowed.
