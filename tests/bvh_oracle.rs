@@ -476,17 +476,31 @@ fn rtree_delete_and_reinsert() {
 #[test]
 fn overflowing_inverse_directions_match_the_oracle() {
     let (o, rays) = faces_and_tiny_directions();
+    check_builders(&o, &rays, rays.len() / 2);
+}
+
+/// Rays through the edges and corners of a lattice of boxes find the
+/// triangles that touch a corner from a diagonal cell.
+#[test]
+fn rays_through_box_edges_and_corners_match_the_oracle() {
+    let (o, rays) = lattice_corners();
+    check_builders(&o, &rays, 60);
+}
+
+/// Every static builder and the R-trees against the oracle on `rays`, more
+/// than `min_hits` of them hitting.
+fn check_builders(o: &OwnedScene, rays: &[Ray], min_hits: usize) {
     let scene = o.scene();
     let n = scene.prim_count();
     for b in STATIC {
         let mut s = Static::new(n, b, 0);
         let bvh = s.build(&scene, b).unwrap();
-        let hits = check(&bvh, &rays, &format!("{b:?} tiny"), oracle_of(&scene));
-        assert!(hits > rays.len() / 2, "{b:?}: {hits} of {} hit", rays.len());
+        let hits = check(&bvh, rays, &format!("{b:?}"), oracle_of(&scene));
+        assert!(hits > min_hits, "{b:?}: {hits} of {} hit", rays.len());
     }
     for (name, p) in rtree_params() {
         let (mut nodes, mut refs) = (Vec::new(), Vec::new());
         let t = build_rtree(&scene, p, &mut nodes, &mut refs);
-        check(&t.bvh(), &rays, &format!("{name} tiny"), oracle_of(&scene));
+        check(&t.bvh(), rays, &name, oracle_of(&scene));
     }
 }

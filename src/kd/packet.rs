@@ -188,18 +188,20 @@ impl Packet {
         (t0, t1)
     }
 
-    /// Where each lane leaves the leaf box of `rp`, and through which face:
-    /// [`KdTree::leaf_exit`]'s arithmetic and tie rule lane by lane (the
-    /// packet's lanes share their direction signs, none of them zero).
+    /// Where each lane leaves the leaf box of `rp`, through which face, and
+    /// the lanes that leave through an edge or corner:
+    /// [`KdTree::leaf_exit_at_edge`]'s arithmetic and tie rule lane by lane
+    /// (the packet's lanes share their direction signs, none of them zero).
     #[inline(always)]
-    pub(crate) fn leaf_exit(&self, rp: &KdRopes) -> (F8, [u8; LANES]) {
+    pub(crate) fn leaf_exit(&self, rp: &KdRopes) -> (F8, [u8; LANES], M8) {
         let mut exit = INF;
         let mut face = [0u8; LANES];
-        for a in 0..3 {
+        let mut ts = [INF; 3];
+        for (a, ta) in ts.iter_mut().enumerate() {
             let bound = if self.up[a] { rp.max[a] } else { rp.min[a] };
-            let t = (F8::splat(bound) - self.o[a]) * self.inv[a];
-            let nearer = t.lt(exit);
-            exit = nearer.select(t, exit);
+            *ta = (F8::splat(bound) - self.o[a]) * self.inv[a];
+            let nearer = ta.lt(exit);
+            exit = nearer.select(*ta, exit);
             let f = (2 * a + self.up[a] as usize) as u8;
             for i in 0..LANES {
                 if nearer.get(i) {
@@ -207,7 +209,8 @@ impl Packet {
                 }
             }
         }
-        (exit, face)
+        let [x, y, z] = ts.map(|t| t.le(exit));
+        (exit, face, (x & y) | (x & z) | (y & z))
     }
 
     /// Lane `i` as the single ray's prepared form (for the cases a lane
@@ -801,13 +804,14 @@ impl KdTree<'_> {
                     (right, left)
                 };
                 // Per lane, as the single ray decides: the near side is
-                // needed unless the plane lies at or before the entry, the
-                // far side unless it lies at or past the exit; a lane that
-                // needs both splits its segment at the plane. (A lane that
-                // does not visit the node needs neither.)
+                // needed unless the plane lies before the entry, the far
+                // side unless it lies past the exit (a plane met exactly
+                // there is a tie: both); a lane that needs both splits its
+                // segment at the plane. (A lane that does not visit the
+                // node needs neither.)
                 let d = (F8::splat(s) - p.o[a]) * p.inv[a];
-                let n = d.gt(tn);
-                let f = d.lt(tf);
+                let n = d.ge(tn);
+                let f = d.le(tf);
                 let both = n & f;
                 if n.any() {
                     if f.any() {

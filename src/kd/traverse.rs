@@ -185,7 +185,9 @@ pub(crate) enum RopeEnd {
     Stopped,
     /// The ray left the scene or its segment ended.
     Exited,
-    /// The ray lies in a split plane it must cross: hierarchical traversal must redo it.
+    /// The ray meets a split plane where a walk from leaf to leaf cannot
+    /// tell the side (it lies in the plane, starts on it, or leaves a leaf
+    /// through an edge or corner): hierarchical traversal must redo it.
     Fallback,
 }
 
@@ -419,10 +421,14 @@ impl<'a> KdTree<'a> {
                 } else {
                     (Decision::Right, Decision::Left, Decision::RightLeft)
                 };
-                if d >= ex_t {
+                // A plane met exactly at the segment's entry or exit is a
+                // tie: both sides hold the point there (planar primitives
+                // in the plane lie on one side only), so both are visited,
+                // one of them over a segment of length zero.
+                if d > ex_t {
                     rec.interior(node, near_only);
                     node = near;
-                } else if d <= en_t {
+                } else if d < en_t {
                     rec.interior(node, far_only);
                     node = far;
                 } else {
@@ -505,12 +511,13 @@ impl<'a> KdTree<'a> {
         stopped
     }
 
-    /// Descends from `node` to the leaf node holding `p`; a point on a
-    /// split plane goes where the ray heads. `None` when the ray lies in the
-    /// plane; [`NO_NODE`] (whose node is [`KdNode::FAULT`]) when the descent
-    /// is deeper than any tree.
+    /// Descends from `node` to the leaf node holding `p`. `None` when `p`
+    /// lies on a split plane: both sides hold it, and a walk from one leaf
+    /// could miss a hit at `p` in the other (the caller walks
+    /// hierarchically instead, which visits both); [`NO_NODE`] (whose node
+    /// is [`KdNode::FAULT`]) when the descent is deeper than any tree.
     #[inline]
-    pub(crate) fn locate(&self, mut node: u32, p: Vec3, d: Vec3, steps: &mut Steps) -> Option<u32> {
+    pub(crate) fn locate(&self, mut node: u32, p: Vec3, steps: &mut Steps) -> Option<u32> {
         for _ in 0..=KD_MAX_DEPTH {
             let nd = self.node(node);
             if nd.is_leaf() {
@@ -518,9 +525,9 @@ impl<'a> KdTree<'a> {
             }
             steps.interior += 1;
             let (a, s, left) = (nd.axis(), nd.split(), nd.left());
-            node = if p[a] < s || (p[a] == s && d[a] < 0.0) {
+            node = if p[a] < s {
                 left
-            } else if p[a] > s || d[a] > 0.0 {
+            } else if p[a] > s {
                 left.wrapping_add(1)
             } else {
                 return None;
@@ -533,8 +540,9 @@ impl<'a> KdTree<'a> {
     /// deciding each split by the ray parameter where the ray meets it
     /// (the comparison hierarchical traversal makes), not by the point's
     /// rounded coordinates: a point computed at a `t` before the origin
-    /// can round onto a plane the ray only reaches later. At the plane the
-    /// ray goes where it heads; `None` when it lies in the plane.
+    /// can round onto a plane the ray only reaches later. `None` when the
+    /// ray meets a plane exactly at `t` or lies in it (a tie that
+    /// hierarchical traversal settles by visiting both sides).
     #[inline]
     pub(crate) fn locate_at(
         &self,
@@ -558,14 +566,11 @@ impl<'a> KdTree<'a> {
                 o < s
             } else {
                 let ts = (s - o) * r.inv_dir[a];
-                if ts.is_nan() {
-                    // On the plane with a direction too small to invert.
-                    d < 0.0
-                } else if d > 0.0 {
-                    t < ts
-                } else {
-                    t >= ts
+                // NaN: on the plane with a direction too small to invert.
+                if ts == t || ts.is_nan() {
+                    return None;
                 }
+                (d > 0.0) == (t < ts)
             };
             node = if below { left } else { left.wrapping_add(1) };
         }
@@ -575,22 +580,35 @@ impl<'a> KdTree<'a> {
     /// Where the ray leaves leaf node `leaf`: the signed distance and the face.
     #[inline]
     pub(crate) fn leaf_exit(&self, r: &PreparedRay, leaf: u32) -> (f32, usize) {
+        let (t_exit, face, _) = self.leaf_exit_at_edge(r, leaf);
+        (t_exit, face)
+    }
+
+    /// [`KdTree::leaf_exit`], and whether the ray meets a face of another
+    /// axis at the same distance: it leaves through an edge or a corner,
+    /// where leaves the face's rope does not lead to hold the exit point
+    /// too (hierarchical traversal visits them all, over segments of
+    /// length zero; a rope walk cannot, and walks hierarchically instead).
+    #[inline]
+    pub(crate) fn leaf_exit_at_edge(&self, r: &PreparedRay, leaf: u32) -> (f32, usize, bool) {
         let rp = self.rope(leaf);
+        let mut ts = [f32::INFINITY; 3];
         let mut t_exit = f32::INFINITY;
         let mut face = 0;
-        for a in 0..3 {
+        for (a, ta) in ts.iter_mut().enumerate() {
             // Selects, not branches: the ray's signs are the same at every leaf.
             let up = r.dir[a] > 0.0;
             let bound = if up { rp.max[a] } else { rp.min[a] };
             let t = (bound - r.origin[a]) * r.inv_dir[a];
             // A ray parallel to the axis never leaves through its faces.
-            let t = if r.dir[a] == 0.0 { f32::INFINITY } else { t };
-            if t < t_exit {
-                t_exit = t;
+            *ta = if r.dir[a] == 0.0 { f32::INFINITY } else { t };
+            if *ta < t_exit {
+                t_exit = *ta;
                 face = 2 * a + up as usize;
             }
         }
-        (t_exit, face)
+        let [x, y, z] = ts.map(|t| t <= t_exit);
+        (t_exit, face, (x & y) | (x & z) | (y & z))
     }
 
     /// The leaf node beyond face `face` of leaf node `leaf` where the ray
@@ -611,7 +629,7 @@ impl<'a> KdTree<'a> {
             return Ok(None);
         }
         let p = rp.onto_face(face, r.at(t_exit));
-        self.locate(next, p, r.dir, steps).map(Some).ok_or(())
+        self.locate(next, p, steps).map(Some).ok_or(())
     }
 
     /// Leaf to leaf by ropes from leaf node `first` (not yet visited) until
@@ -651,12 +669,15 @@ impl<'a> KdTree<'a> {
                 break;
             };
             steps.empty += refs.is_empty() as u64;
-            let (t_exit, face) = self.leaf_exit(&r, leaf);
+            let (t_exit, face, at_edge) = self.leaf_exit_at_edge(&r, leaf);
             if v.visit(&self.scene, refs, t_exit.min(t1)) {
                 return RopeEnd::Stopped;
             }
             if t_exit > t1 {
                 return RopeEnd::Exited;
+            }
+            if at_edge {
+                return RopeEnd::Fallback;
             }
             match next(leaf, t_exit, face, steps) {
                 Ok(Some(n)) => leaf = n,

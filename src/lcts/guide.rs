@@ -361,9 +361,12 @@ pub(crate) fn walk_past(
     steps: &mut Steps,
 ) -> bool {
     let r = v.ray;
-    let (t_exit, face) = tree.leaf_exit(&r, last);
+    let (t_exit, face, at_edge) = tree.leaf_exit_at_edge(&r, last);
     if t_exit > t1 {
         return true;
+    }
+    if at_edge {
+        return false;
     }
     match next(tree, &r, last, t_exit, face, paths, cur, steps) {
         Ok(None) => true,
@@ -419,7 +422,7 @@ pub(crate) fn next(
     if let Some(n) = cur.guess(tree, paths, leaf, p, r.dir, steps) {
         return Ok(Some(n));
     }
-    match tree.locate(rope, p, r.dir, steps) {
+    match tree.locate(rope, p, steps) {
         Some(leaf) => {
             if cur.next != u32::MAX {
                 cur.resync(paths, leaf);

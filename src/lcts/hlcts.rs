@@ -525,7 +525,7 @@ pub fn trace_guided(
                         max: Vec3::from(e.max),
                     };
                     let (te, _) = bx.clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max)?;
-                    tree.locate(e.node, r.at(te), r.dir, steps)
+                    tree.locate(e.node, r.at(te), steps)
                 };
                 guide::walk_from_first(
                     tree, &mut v, t0, t1, paths, &mut cur, &mut steps, from_entry,

@@ -278,11 +278,11 @@ pub fn trace(
         // No common leaf: the first leaf from the shaft's entry node (one
         // step for the test that the entry point lies strictly inside it).
         Some((t0, t1)) if s.len == 0 => {
-            let from_entry = |r: &PreparedRay, p: Vec3, steps: &mut Steps| {
+            let from_entry = |_: &PreparedRay, p: Vec3, steps: &mut Steps| {
                 let e = s.entry?;
                 steps.interior += 1;
                 e.holds(p).then_some(())?;
-                tree.locate(e.node, p, r.dir, steps)
+                tree.locate(e.node, p, steps)
             };
             guide::walk_from_first(
                 tree, &mut v, t0, t1, paths, &mut cur, &mut steps, from_entry,

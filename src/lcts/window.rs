@@ -130,13 +130,13 @@ fn trace_packet(
     // One leaf for the lanes `on`: a step each, its primitives tested; the
     // lanes with a hit clearly inside it are done. Returns where each lane
     // leaves it; `None` for a leaf whose references lie outside the tree.
-    let mut test = |leaf: u32, on: &mut M8, steps: &mut Steps| -> Option<(F8, [u8; LANES])> {
+    let mut test = |leaf: u32, on: &mut M8, steps: &mut Steps| -> Option<(F8, [u8; LANES], M8)> {
         steps.leaves += on.count() as u64;
         let refs = tree.leaf_refs(tree.node(leaf))?;
-        let (t_exit, face) = p.leaf_exit(tree.rope(leaf));
-        let done = v.visit(tree, p, refs, *on, t_exit.min(t1));
+        let exits = p.leaf_exit(tree.rope(leaf));
+        let done = v.visit(tree, p, refs, *on, exits.0.min(t1));
         *on = *on & !done;
-        Some((t_exit, face))
+        Some(exits)
     };
     // The common leaves, as walk_common visits them: a run of empty leaves
     // is one step and no test.
@@ -153,7 +153,8 @@ fn trace_packet(
             exits = Some(test(leaf, &mut on, &mut steps)?);
         }
     }
-    let (mut t_exit, mut faces) = exits.unwrap_or_else(|| p.leaf_exit(tree.rope(leaf)));
+    let (mut t_exit, mut faces, mut at_edge) =
+        exits.unwrap_or_else(|| p.leaf_exit(tree.rope(leaf)));
     let mut cursors = [Cursor::new(paths, 0); LANES];
     for (c, &near) in cursors.iter_mut().zip(nearest) {
         *c = Cursor::new(paths, near);
@@ -165,8 +166,10 @@ fn trace_packet(
         let Some(first) = (0..LANES).find(|&i| on.get(i)) else {
             break;
         };
+        // A lane through an edge or corner goes on alone (and so
+        // hierarchically, as its single ray).
         let face = faces[first];
-        if (0..LANES).any(|i| on.get(i) && faces[i] != face) {
+        if (0..LANES).any(|i| on.get(i) && faces[i] != face) || (on & at_edge).any() {
             break;
         }
         let rope = tree.rope(leaf).neighbor[face as usize];
@@ -188,7 +191,7 @@ fn trace_packet(
         if tree.leaf_is_empty(leaf) {
             steps.empty += on.count() as u64;
         }
-        (t_exit, faces) = test(leaf, &mut on, &mut steps)?;
+        (t_exit, faces, at_edge) = test(leaf, &mut on, &mut steps)?;
     }
     steps.flush(stats);
     stats.rays += hits.len() as u64;

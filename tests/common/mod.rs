@@ -218,3 +218,53 @@ pub fn faces_and_tiny_directions() -> (OwnedScene, Vec<Ray>) {
     }
     (o, rays)
 }
+
+/// Small triangles with a vertex on each of a 4 x 4 x 4 lattice's points,
+/// reaching into a third of the octants around it, and rays from the
+/// cells' centres along diagonals that pass exactly through lattice
+/// points, edges and faces (every point and parameter exact in `f32`):
+/// SAH splits fall on the lattice's planes, so these rays leave cells
+/// through edges and corners, where a triangle touching the point from a
+/// diagonal cell is hit at the corner's `t` and nowhere else.
+pub fn lattice_corners() -> (OwnedScene, Vec<Ray>) {
+    let mut rng = Rng(5);
+    let mut o = OwnedScene::default();
+    let points = (0..64).map(|i| Vec3::new((i % 4) as f32, (i / 4 % 4) as f32, (i / 16) as f32));
+    for c in points.clone() {
+        for octant in 0..8 {
+            if rng.below(3) != 0 {
+                continue;
+            }
+            let s = Vec3::new(
+                if octant & 1 == 0 { 1.0 } else { -1.0 },
+                if octant & 2 == 0 { 1.0 } else { -1.0 },
+                if octant & 4 == 0 { 1.0 } else { -1.0 },
+            );
+            o.add_triangle(
+                c,
+                c + s * Vec3::new(0.375, 0.25, 0.125),
+                c + s * Vec3::new(0.125, 0.375, 0.25),
+            );
+        }
+    }
+    let dirs = [
+        [1.0f32, 1.0, 1.0],
+        [1.0, 1.0, 0.25],
+        [1.0, -1.0, 0.0],
+        [-1.0, 1.0, 1.0],
+        [0.5, 1.0, -1.0],
+        [1.0, 0.0, 0.0],
+    ];
+    let mut rays = Vec::new();
+    for c in points {
+        for d in dirs {
+            rays.push(Ray::new(
+                c + Vec3::splat(0.5),
+                Vec3::from_array(d),
+                0.0,
+                f32::INFINITY,
+            ));
+        }
+    }
+    (o, rays)
+}
