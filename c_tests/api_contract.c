@@ -58,10 +58,11 @@ int main(void) {
         bad = p;
         bad.max_depth = 61;
         CHECK_STATUS(coray_kdtree_requirements(n, &bad, &req), CORAY_STATUS_INVALID_PARAMETER);
-        /* omit_ropes (1.2): AUTO leaves the ropes out, PAPER keeps them; 0 or 1 only. */
+        /* omit_ropes (1.2): AUTO leaves the ropes out, PAPER keeps them; 2
+         * (1.5) leaves out the empty leaves beside full ones too; 0 to 2 only. */
         CHECK(p.omit_ropes == 1 && coray_kdtree_params_default(CORAY_KD_PRESET_PAPER).omit_ropes == 0);
         bad = p;
-        bad.omit_ropes = 2;
+        bad.omit_ropes = 3;
         CHECK_STATUS(coray_kdtree_requirements(n, &bad, &req), CORAY_STATUS_INVALID_PARAMETER);
         bad = coray_kdtree_params_default(99);
         CHECK(bad.struct_size == 0);
@@ -160,6 +161,29 @@ int main(void) {
         CHECK_STATUS(coray_kdtree_intersect(&roped.tree, CORAY_TRAVERSAL_ROPES, rays, hits2, 512, &stack, sizeof stack, NULL), CORAY_STATUS_OK);
         CHECK(same_hits(hits, hits2, 512));
         free(roped.arena);
+    }
+    /* Compact (omit_ropes 2): the same leaves and references, fewer nodes
+     * (node 1 stands for the empty leaves left out), 8 bytes less for each,
+     * the same hits and statistics. */
+    {
+        CorayKdParams pc = p;
+        CorayKdTreeInfo ci = info;
+        CorayShape cs = shape;
+        CorayTraceStats cst;
+        Tree compact;
+        pc.omit_ropes = 2;
+        compact = tree_build_with(&ts.view, &pc);
+        CHECK_STATUS(coray_kdtree_info(&compact.tree, &ci), CORAY_STATUS_OK);
+        CHECK(ci.leaf_count == info.leaf_count && ci.ref_count == info.ref_count && ci.depth == info.depth);
+        CHECK(ci.node_count < info.node_count && ci.node_count + shape.empty_leaf_count >= info.node_count + 1);
+        CHECK(ci.arena_bytes_used == info.arena_bytes_used - ((8 * (size_t)info.node_count + 15) / 16) * 16
+                                         + ((8 * (size_t)ci.node_count + 15) / 16) * 16);
+        CHECK_STATUS(coray_kdtree_validate(&compact.tree, NULL, 0, &cs), CORAY_STATUS_OK);
+        CHECK(cs.leaf_count == shape.leaf_count && cs.empty_leaf_count == shape.empty_leaf_count && cs.ref_count == shape.ref_count);
+        cst = stats0();
+        CHECK_STATUS(coray_kdtree_intersect(&compact.tree, CORAY_TRAVERSAL_HIERARCHICAL, rays, hits2, 512, &stack, sizeof stack, &cst), CORAY_STATUS_OK);
+        CHECK(same_hits(hits, hits2, 512) && cst.traversal_steps == st.traversal_steps && cst.prim_tests == st.prim_tests);
+        free(compact.arena);
     }
     {
         size_t nhit = 0;

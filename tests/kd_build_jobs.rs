@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{random_scene, Rng};
+use common::{random_scene, with_empty_leaves, Rng};
 use coray::kd::{
     self, KdEvent, KdInfo, KdJobReport, KdNode, KdParams, KdRequirements, KdRopes, KdScratch,
     KdStorage, KD_FLAG_ROPES, KD_FLAG_TRUNCATED,
@@ -196,6 +196,7 @@ const PINNED: [(&str, u64, u64); 8] = [
 fn job_build_equals_depth_first_on_spd_scenes_whose_trees_are_pinned() {
     let mut truncated = Vec::new();
     let mut digests = Vec::new();
+    let mut elided = Vec::new();
     for &(name, _) in spd::SCENES {
         let mesh = spd_mesh(name, None);
         let scene = mesh.scene();
@@ -209,6 +210,24 @@ fn job_build_equals_depth_first_on_spd_scenes_whose_trees_are_pinned() {
         // `auto` builds no ropes: its jobs run without rope slots. The tree
         // is `auto` with ropes less its ropes (pinned with them).
         let (auto, paper) = (check(KdParams::auto()), check(KdParams::paper()));
+        // Compact: `auto` less its empty leaves beside full ones (node 1
+        // stands for them); put back, `auto`'s nodes.
+        let compact = check(KdParams::compact());
+        let put_back = with_empty_leaves(&compact.nodes);
+        assert!(
+            put_back == auto.nodes && compact.refs == auto.refs,
+            "{name}"
+        );
+        assert_eq!(
+            KdInfo {
+                flags: auto.info.flags | kd::KD_FLAG_COMPACT,
+                node_count: compact.info.node_count,
+                ..auto.info
+            },
+            compact.info,
+            "{name}"
+        );
+        elided.push(auto.nodes.len() + 1 - compact.nodes.len());
         let with_ropes = KdParams::auto_with_ropes();
         let roped = depth_first(
             &scene,
@@ -234,7 +253,9 @@ fn job_build_equals_depth_first_on_spd_scenes_whose_trees_are_pinned() {
         digests.push((name, tree_digest(&roped), tree_digest(&paper)));
     }
     // The one build here the depth-first build truncates.
-    assert_eq!(truncated, [("gears", true)]);
+    assert_eq!(truncated, [("gears", true), ("gears", true)]);
+    // Empty leaves compact trees leave out, per scene (all of `auto`'s).
+    assert_eq!(elided, [6107, 10641, 0, 6033, 10892, 15670, 1364, 9870]);
     assert_eq!(digests, PINNED, "digests (name, auto, paper)");
 }
 
@@ -243,7 +264,10 @@ fn job_build_equals_depth_first_on_random_scenes() {
     let mut rng = Rng(7);
     for (tris, spheres, cones) in [(3000, 300, 100), (5000, 0, 0), (0, 2000, 500)] {
         let o = random_scene(&mut rng, tris, spheres, cones, 10.0);
-        assert!(!check_equal(&o.scene(), &KdParams::auto(), &format!("random {tris}")).0);
+        for params in [KdParams::auto(), KdParams::compact()] {
+            let what = format!("random {tris} {params:?}");
+            assert!(!check_equal(&o.scene(), &params, &what).0);
+        }
     }
 }
 
@@ -438,12 +462,15 @@ fn tree_digest(m: &Made) -> u64 {
             stack.push(n.left() as usize);
         }
     }
+    // Interior nodes in the pinned trees' encoding (the left child above
+    // the axis' two bits; these trees store every child).
     m.nodes.iter().enumerate().for_each(|(i, n)| {
         if n.is_leaf() {
             word(number[i] << 2 | 3);
             word(0);
         } else {
-            word(n.word);
+            assert_eq!(n.elided(), 0);
+            word(n.left() << 2 | n.axis() as u32);
             word(n.data);
         }
     });

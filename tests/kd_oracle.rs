@@ -3,15 +3,18 @@
 mod common;
 
 use common::*;
-use coray::kd::{self, KdParams, KdTree, Traversal};
+use coray::kd::{self, KdInfo, KdParams, KdTree, KdTreeStats, Traversal};
 use coray::{oracle, Accel, Cone, Hit, Ray, Sphere, TraceStats, Vec3};
 
 const METHODS: [Traversal; 2] = [Traversal::Hierarchical, Traversal::Ropes];
 // `auto` with ropes: its nodes and references are `auto`'s (pinned in
 // tests/kd_build_jobs.rs), and rope traversal has ropes to walk.
-const PRESETS: [(&str, KdParams); 2] = [
+// `compact`: `auto` without the empty leaves beside full ones (its rope
+// traversal walks hierarchically).
+const PRESETS: [(&str, KdParams); 3] = [
     ("paper", KdParams::paper()),
     ("auto", KdParams::auto_with_ropes()),
+    ("compact", KdParams::compact()),
 ];
 
 /// Both miss, or both hit at the same t bit for bit (both call the same
@@ -342,6 +345,11 @@ fn exact_fit_and_one_less() {
             ropes: false,
             ..KdParams::paper()
         },
+        KdParams {
+            ropes: false,
+            compact: true,
+            ..KdParams::paper()
+        },
     ] {
         exact_fit_and_one_less_with(&params);
     }
@@ -360,7 +368,9 @@ fn exact_fit_and_one_less_with(params: &KdParams) {
         assert_eq!(min.ropes, params.ropes as usize);
         let (mut b, _, _) = storage_for(&min);
         let tree = build_with(&scene, &params, &min, &mut b);
-        assert_eq!(tree.info().node_count, 1);
+        // One leaf (and a compact tree's shared empty leaf).
+        assert_eq!(tree.info().node_count as usize, min.nodes);
+        assert_eq!(min.nodes, 1 + params.compact as usize);
         if n > params.leaf_size as usize {
             assert!(
                 tree.info().truncated(),
@@ -392,7 +402,7 @@ fn exact_fit_and_one_less_with(params: &KdParams) {
         // Halfway between minimum and ideal: may truncate, must stay exact.
         let ideal = kd::requirements(n, &params);
         let half = kd::KdRequirements {
-            nodes: (ideal.nodes / 8).max(1),
+            nodes: (ideal.nodes / 8).max(min.nodes),
             ropes: (ideal.ropes / 8).max(min.ropes),
             rope_ids: (ideal.rope_ids / 8).max(min.rope_ids),
             refs: (ideal.refs / 3).max(n),
@@ -758,4 +768,89 @@ fn rays_through_cell_edges_and_corners_match_the_oracle() {
     let (o, rays) = lattice_corners();
     let hits = check_walks_and_packets(&o, &rays, "lattice");
     assert!(hits > 60, "{hits} of {} hit", rays.len());
+}
+
+/// A compact tree (`KdParams::compact`) is `auto`'s tree less its empty
+/// leaves beside full ones: put back, the same nodes; the same references,
+/// 8 bytes less per leaf left out; every walk gives the same hits and the
+/// same statistics (node 1 stands for each leaf left out). Validation
+/// refuses a node that leaves a child out in a tree not flagged compact,
+/// and the compact flag on a tree with ropes.
+#[test]
+fn a_compact_tree_is_auto_less_its_empty_leaves_and_traces_alike() {
+    use coray::owned::OwnedKd;
+    let mut rng = Rng(21);
+    let o = random_scene(&mut rng, 2500, 300, 100, 1.0);
+    let scene = o.scene();
+    let mut rays = random_rays(&mut rng, 2000, 1.0);
+    rays.extend(
+        lattice_corners()
+            .1
+            .iter()
+            .map(|r| Ray::new(r.origin * 0.3 - Vec3::splat(0.6), r.dir, r.t_min, r.t_max)),
+    );
+    let auto = OwnedKd::new(&scene, &KdParams::auto()).unwrap();
+    let compact = OwnedKd::new(&scene, &KdParams::compact()).unwrap();
+    let (a, c) = (auto.tree(scene).unwrap(), compact.tree(scene).unwrap());
+    let (sa, sc) = (a.validate().unwrap(), c.validate().unwrap());
+    assert_eq!(
+        sa,
+        KdTreeStats {
+            nodes: sa.nodes,
+            ..sc
+        }
+    );
+    assert!(c.info().is_compact() && !a.info().is_compact());
+    let ((an, _, _, arefs), (cn, _, _, crefs)) = (a.parts(), c.parts());
+    assert!(with_empty_leaves(cn) == an && arefs == crefs);
+    let left_out = an.len() + 1 - cn.len();
+    assert!(left_out > an.len() / 8, "{left_out} of {} nodes", an.len());
+    assert_eq!(
+        auto.arena_bytes() - compact.arena_bytes(),
+        (8 * an.len()).next_multiple_of(16) - (8 * cn.len()).next_multiple_of(16)
+    );
+    check_all(&c, &rays, "compact");
+    for m in [
+        Traversal::Hierarchical,
+        Traversal::Ropes,
+        Traversal::Packets,
+    ] {
+        let (mut ha, mut hc) = (vec![Hit::MISS; rays.len()], vec![Hit::MISS; rays.len()]);
+        let (mut st_a, mut st_c) = (TraceStats::default(), TraceStats::default());
+        a.intersect_many(&rays, &mut ha, m, &mut kst(), &mut st_a)
+            .unwrap();
+        c.intersect_many(&rays, &mut hc, m, &mut kst(), &mut st_c)
+            .unwrap();
+        assert!(ha == hc && st_a == st_c, "{m:?}: {st_a:?} {st_c:?}");
+        let (mut oa, mut oc) = (vec![false; rays.len()], vec![false; rays.len()]);
+        a.occluded_many(&rays, &mut oa, m, &mut kst(), &mut st_a)
+            .unwrap();
+        c.occluded_many(&rays, &mut oc, m, &mut kst(), &mut st_c)
+            .unwrap();
+        assert!(oa == oc && st_a == st_c, "{m:?} occluded");
+    }
+    // The compact flag cleared: its nodes that leave a child out are refused.
+    let (info, (nodes, ropes, ids, refs)) = (*c.info(), c.parts());
+    let plain = KdInfo {
+        flags: info.flags & !kd::KD_FLAG_COMPACT,
+        ..info
+    };
+    let t = KdTree::from_parts(scene, plain, nodes, ropes, ids, refs).unwrap();
+    assert!(t.validate().is_err());
+    // And set on a tree with ropes.
+    let roped = OwnedKd::new(&scene, &KdParams::auto_with_ropes()).unwrap();
+    let r = roped.tree(scene).unwrap();
+    let (info, (nodes, ropes, ids, refs)) = (*r.info(), r.parts());
+    let flagged = KdInfo {
+        flags: info.flags | kd::KD_FLAG_COMPACT,
+        ..info
+    };
+    let t = KdTree::from_parts(scene, flagged, nodes, ropes, ids, refs).unwrap();
+    assert!(t.validate().is_err());
+    // A build asked for both is refused.
+    let both = KdParams {
+        ropes: true,
+        ..KdParams::compact()
+    };
+    assert!(both.check().is_err());
 }

@@ -94,14 +94,12 @@ impl<'s> Built<'s> {
                 b.inner = Inner::Kd(o, traversal);
             }
             Method::KdC { calls } => {
-                let p = match preset {
-                    Preset::Auto => coray_ffi::CORAY_KD_PRESET_AUTO,
-                    Preset::Paper => coray_ffi::CORAY_KD_PRESET_PAPER,
-                };
+                let (p, omit_ropes) = preset.c_params(false);
                 let t = Instant::now();
                 let tree = coray_ffi::through_c::CKdTree::new(
                     &scene,
                     p,
+                    omit_ropes,
                     coray_ffi::CORAY_TRAVERSAL_HIERARCHICAL,
                 )
                 .map_err(|s| format!("{method} build: {}", coray_ffi::status_description(s as i32).to_string_lossy()))?;

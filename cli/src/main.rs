@@ -63,7 +63,7 @@ enum Command {
         /// The method rays are traced with (`coray bench --help` lists them all).
         #[arg(long, default_value = "kd")]
         accel: String,
-        /// kd-tree preset of `kd` and `kd-rope`: auto or paper.
+        /// kd-tree preset of `kd` and `kd-rope`: auto, paper or compact.
         #[arg(long, default_value = "auto")]
         preset: String,
         /// Reflection and refraction depth (0 to 64; default 5). `--spd` fixes it.
@@ -93,7 +93,8 @@ enum Command {
         /// Comma-separated methods (default: every method of this build). See the list below.
         #[arg(long, value_delimiter = ',')]
         methods: Option<Vec<String>>,
-        /// kd-tree preset: `auto` (SAH termination) or `paper` (depth 16, 2 per leaf).
+        /// kd-tree preset: `auto` (SAH termination), `paper` (depth 16, 2 per leaf) or
+        /// `compact` (auto without the empty leaves beside full ones).
         #[arg(long, default_value = "auto")]
         preset: String,
         /// Timed runs per method; the best one counts.
@@ -146,11 +147,13 @@ enum Command {
         /// The file to write.
         #[arg(short, long, default_value = "scene.coray")]
         output: PathBuf,
-        /// kd-tree preset: auto or paper.
+        /// kd-tree preset: auto, paper or compact (auto without the empty
+        /// leaves beside full ones, and never with ropes).
         #[arg(long, default_value = "auto")]
         preset: String,
         /// Leave the ropes out (48 bytes a leaf): a smaller file whose tree
-        /// rope traversal walks hierarchically and the LCTS casts refuse.
+        /// rope traversal walks hierarchically and the LCTS casts refuse
+        /// (`compact` has none either way).
         #[arg(long)]
         no_ropes: bool,
     },
@@ -481,10 +484,7 @@ fn run(command: Command, floor_split: u32) -> Result<i32, String> {
             preset,
             no_ropes,
         } => {
-            let preset = match Preset::parse(&preset)? {
-                Preset::Auto => coray_ffi::CORAY_KD_PRESET_AUTO,
-                Preset::Paper => coray_ffi::CORAY_KD_PRESET_PAPER,
-            };
+            let (preset, omit_ropes) = Preset::parse(&preset)?.c_params(!no_ropes);
             let s = scene::load(&scene, &opts)?;
             let n = s.prim_count();
             budget::check_memory(
@@ -494,7 +494,7 @@ fn run(command: Command, floor_split: u32) -> Result<i32, String> {
                     &coray::kd::KdParams::auto_with_ropes(),
                 )),
             )?;
-            let bytes = coray_ffi::saved::kdtree_file(&s.mesh.scene(), preset, !no_ropes)
+            let bytes = coray_ffi::saved::kdtree_file(&s.mesh.scene(), preset, omit_ropes)
                 .map_err(|st| format!("{scene}: the build failed: {}", status_text(st)))?;
             std::fs::write(&output, &bytes).map_err(|e| format!("{}: {e}", output.display()))?;
             println!(

@@ -17,17 +17,20 @@ pub enum Preset {
     Auto,
     /// The LCTS paper's: depth 16, leaves of 2.
     Paper,
+    /// `auto` without the empty leaves beside full ones (no ropes).
+    Compact,
 }
 
 impl Preset {
     /// The names, for help and errors.
-    pub const NAMES: [&'static str; 2] = ["auto", "paper"];
+    pub const NAMES: [&'static str; 3] = ["auto", "paper", "compact"];
 
-    /// Parses `auto` or `paper`.
+    /// Parses `auto`, `paper` or `compact`.
     pub fn parse(s: &str) -> Result<Preset, String> {
         match s {
             "auto" => Ok(Preset::Auto),
             "paper" => Ok(Preset::Paper),
+            "compact" => Ok(Preset::Compact),
             _ => Err(format!(
                 "unknown preset `{s}` (have: {})",
                 Preset::NAMES.join(", ")
@@ -40,6 +43,17 @@ impl Preset {
         match self {
             Preset::Auto => KdParams::auto(),
             Preset::Paper => KdParams::paper(),
+            Preset::Compact => KdParams::compact(),
+        }
+    }
+
+    /// The C preset and `omit_ropes` of these parameters (ropes kept when
+    /// `ropes`, where the preset has none; a compact tree never has them).
+    pub fn c_params(self, ropes: bool) -> (coray_ffi::CorayKdPreset, u32) {
+        match self {
+            Preset::Auto => (coray_ffi::CORAY_KD_PRESET_AUTO, !ropes as u32),
+            Preset::Paper => (coray_ffi::CORAY_KD_PRESET_PAPER, !ropes as u32),
+            Preset::Compact => (coray_ffi::CORAY_KD_PRESET_AUTO, 2),
         }
     }
 }
@@ -241,7 +255,8 @@ impl Method {
     pub fn help() -> String {
         let names: Vec<String> = Method::all().iter().map(|m| m.to_string()).collect();
         format!(
-            "{}, kd-paper, kd-paper-rope, kd-paper-packet, kd-c, kd-c1, kd-c1-handle, slcts1d:N, slcts2d:NxM, wide:N, \
+            "{}, kd-paper, kd-paper-rope, kd-paper-packet, kd-compact, kd-compact-packet, kd-c, kd-c1, kd-c1-handle, \
+             slcts1d:N, slcts2d:NxM, wide:N, \
              and proj-BUILDER-CRITERIA-SCHEME (BUILDER {}, CRITERIA 2d|dummy, SCHEME 2d|3d|comb)",
             names.join(", "),
             PROJ_BUILDERS.join("|")
@@ -266,6 +281,9 @@ impl Method {
             "kd-packet" => return kd(None, Traversal::Packets),
             "kd-paper-packet" => return kd(Some(Preset::Paper), Traversal::Packets),
             "kd-auto-packet" => return kd(Some(Preset::Auto), Traversal::Packets),
+            "kd-compact" => return kd(Some(Preset::Compact), Traversal::Hierarchical),
+            "kd-compact-rope" => return kd(Some(Preset::Compact), Traversal::Ropes),
+            "kd-compact-packet" => return kd(Some(Preset::Compact), Traversal::Packets),
             "kd-c" => {
                 return Some(Method::KdC {
                     calls: CCalls::Arrays,
@@ -367,6 +385,7 @@ impl fmt::Display for Method {
                     None => "",
                     Some(Preset::Auto) => "-auto",
                     Some(Preset::Paper) => "-paper",
+                    Some(Preset::Compact) => "-compact",
                 };
                 let t = match traversal {
                     Traversal::Hierarchical => "",
@@ -437,6 +456,9 @@ mod tests {
             "kd-paper",
             "kd-paper-rope",
             "kd-paper-packet",
+            "kd-compact",
+            "kd-compact-rope",
+            "kd-compact-packet",
             "embree",
             "embree8",
         ] {

@@ -708,7 +708,14 @@ fn build_table_has_every_builder() {
         .iter()
         .map(|c| c["builder"].as_str().unwrap())
         .collect();
-    let mut want = vec!["kd-auto", "kd-auto (2 thr)", "kd-paper", "tdbs-sah", "wide"];
+    let mut want = vec![
+        "kd-auto",
+        "kd-auto (2 thr)",
+        "kd-paper",
+        "kd-compact",
+        "tdbs-sah",
+        "wide",
+    ];
     if cfg!(feature = "embree") {
         want.extend(["embree (1 thr)", "embree (2 thr)"]);
     }
@@ -722,11 +729,18 @@ fn build_table_has_every_builder() {
     // eight links per primitive: 24 + 4 + 32 bytes.
     let cells = rows[0]["cells"].as_array().unwrap();
     assert!(cells[0]["scratch_per_prim"].as_f64().unwrap() > 0.0);
-    assert_eq!(cells[3]["scratch_per_prim"], 60.0);
+    assert_eq!(cells[4]["scratch_per_prim"], 60.0);
     // The wide hierarchy keeps less than the binary one it is collapsed
     // from (nodes of four entries, leaves of up to four).
     let kept = |i: usize| cells[i]["bytes_per_prim"].as_f64().unwrap();
-    assert!(kept(4) < kept(3), "wide {} tdbs-sah {}", kept(4), kept(3));
+    assert!(kept(5) < kept(4), "wide {} tdbs-sah {}", kept(5), kept(4));
+    // A compact tree keeps no more than kd-auto's (less where the SAH
+    // cuts empty space off beside a full child).
+    for row in rows {
+        let c = row["cells"].as_array().unwrap();
+        let b = |i: usize| c[i]["bytes_per_prim"].as_f64().unwrap();
+        assert!(b(3) <= b(0), "{row}");
+    }
     // The build's jobs on two threads make the same tree.
     for row in rows {
         let c = row["cells"].as_array().unwrap();
@@ -734,7 +748,7 @@ fn build_table_has_every_builder() {
     }
     // Beside the builds, the primary rays through kd-auto's tree and
     // Embree's, every one answering as kd-auto's hierarchical traversal.
-    let mut want = vec!["kd", "kd-packet"];
+    let mut want = vec!["kd", "kd-packet", "kd-compact", "kd-compact-packet"];
     if cfg!(feature = "embree") {
         want.extend(["embree", "embree8"]);
     }

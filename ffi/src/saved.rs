@@ -39,19 +39,20 @@ fn aligned(bytes: usize) -> Vec<u128> {
     std::vec![0u128; bytes.div_ceil(16).max(1)]
 }
 
-/// A kd-tree built on `scene` with `preset`, with ropes or without, by
+/// A kd-tree built on `scene` with `preset` and `omit_ropes` (0 ropes, 1
+/// none, 2 none and compact: `CorayKdParams::omit_ropes`), by
 /// `coray_kdtree_build`: the arena (16-byte aligned words, cut to what the
 /// tree uses) and the bytes the tree uses (`arena_bytes_used`).
 pub(crate) fn build_arena(
     scene: &Scene,
     preset: CorayKdPreset,
-    ropes: bool,
+    omit_ropes: u32,
 ) -> Result<(Vec<u128>, usize), CorayStatus> {
     let mut params = coray_kdtree_params_default(preset);
     if params.struct_size == 0 {
         return Err(CorayStatus::InvalidParameter);
     }
-    params.omit_ropes = u32::from(!ropes);
+    params.omit_ropes = omit_ropes;
     let c = c_scene(scene);
     let mut req = coray_requirements_default();
     // SAFETY: params and req are live locals with struct_size set.
@@ -113,14 +114,15 @@ pub(crate) fn c_scene(scene: &Scene) -> CorayScene {
     c
 }
 
-/// The file holding `scene` and a kd-tree built on it with `preset`, with
-/// ropes (every call works on it, the casts too) or without (smaller).
+/// The file holding `scene` and a kd-tree built on it with `preset` and
+/// `omit_ropes`: with ropes (0: every call works on it, the casts too),
+/// without (1: smaller) or compact (2: smaller still).
 pub fn kdtree_file(
     scene: &Scene,
     preset: CorayKdPreset,
-    ropes: bool,
+    omit_ropes: u32,
 ) -> Result<Vec<u8>, CorayStatus> {
-    let (arena, arena_bytes) = build_arena(scene, preset, ropes)?;
+    let (arena, arena_bytes) = build_arena(scene, preset, omit_ropes)?;
     let arena: Vec<u8> = arena
         .iter()
         .flat_map(|w| w.to_ne_bytes())

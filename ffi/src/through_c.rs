@@ -87,15 +87,15 @@ impl Default for CStack {
 
 impl<'s> CKdTree<'s> {
     /// Builds a tree on `scene` with `preset` (`CORAY_KD_PRESET_*`) and
-    /// opens it, to be traced by `traversal` (`CORAY_TRAVERSAL_*`): with
-    /// ropes for rope traversal, else without.
+    /// `omit_ropes` (`CorayKdParams::omit_ropes`) and opens it, to be
+    /// traced by `traversal` (`CORAY_TRAVERSAL_*`).
     pub fn new(
         scene: &Scene<'s>,
         preset: CorayKdPreset,
+        omit_ropes: u32,
         traversal: CorayTraversal,
     ) -> Result<CKdTree<'s>, CorayStatus> {
-        let ropes = traversal == crate::CORAY_TRAVERSAL_ROPES;
-        let (arena, bytes) = build_arena(scene, preset, ropes)?;
+        let (arena, bytes) = build_arena(scene, preset, omit_ropes)?;
         let c = c_scene(scene);
         let mut handle = CorayKdTree { opaque: [0; 32] };
         // SAFETY: the arena was just built (16-byte aligned, `bytes` long)
@@ -281,12 +281,16 @@ mod tests {
             .map(|r| core.intersect(r, Traversal::Hierarchical, &mut core_stack, &mut st))
             .collect();
         assert!(want.iter().any(|h| h.is_hit()) && want.iter().any(|h| !h.is_hit()));
-        for traversal in [
-            CORAY_TRAVERSAL_HIERARCHICAL,
-            CORAY_TRAVERSAL_ROPES,
-            CORAY_TRAVERSAL_PACKETS,
+        // With ropes for rope traversal, without for the others, and compact.
+        for (traversal, omit_ropes) in [
+            (CORAY_TRAVERSAL_HIERARCHICAL, 1),
+            (CORAY_TRAVERSAL_ROPES, 0),
+            (CORAY_TRAVERSAL_PACKETS, 1),
+            (CORAY_TRAVERSAL_HIERARCHICAL, 2),
+            (CORAY_TRAVERSAL_PACKETS, 2),
         ] {
-            let t = CKdTree::new(&scene, CORAY_KD_PRESET_AUTO, traversal).expect("open");
+            let t =
+                CKdTree::new(&scene, CORAY_KD_PRESET_AUTO, omit_ropes, traversal).expect("open");
             let mut stack = CStack::default();
             let mut hits = std::vec![Hit::MISS; rays.len()];
             t.intersect(&rays, &mut hits, &mut stack)

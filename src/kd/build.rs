@@ -9,7 +9,8 @@
 //! pending right children plus one split's temporaries.
 
 use super::node::{
-    KdInfo, KdNode, KD_FLAG_ROPES, KD_FLAG_TRUNCATED, KD_MAGIC, KD_MAX_DEPTH, KD_VERSION,
+    KdInfo, KdNode, KD_FLAG_COMPACT, KD_FLAG_ROPES, KD_FLAG_TRUNCATED, KD_MAGIC, KD_MAX_DEPTH,
+    KD_VERSION, SHARED_EMPTY,
 };
 use super::{min_requirements, ropes, KdParams, KdScratch, KdStorage, KdTree};
 use crate::geom::{Aabb, Scene};
@@ -167,8 +168,14 @@ fn with_min(b: &Aabb, axis: usize, v: f32) -> Aabb {
     r
 }
 
-/// Most nodes a tree holds: indices live in 30 bits.
-pub(super) const MAX_NODES: usize = crate::limits::MAX_PRIMS - 1;
+/// Where a tree's first pair of children goes: after the root, and after
+/// the shared empty leaf ([`SHARED_EMPTY`]) in a compact tree.
+pub(super) fn first_pair(params: &KdParams) -> usize {
+    1 + params.compact as usize
+}
+
+/// Most nodes a tree holds: child indices live in 28 bits.
+pub(super) const MAX_NODES: usize = super::node::MAX_CHILD_INDEX as usize;
 
 pub(super) struct Builder<'s, 'a> {
     scene: Scene<'a>,
@@ -188,6 +195,8 @@ pub(super) struct Builder<'s, 'a> {
     node_cap: usize,
     leaf_cap: usize,
     pub(super) node_top: usize,
+    /// Empty children of empty-space cuts are left out (a compact tree).
+    elide: bool,
     pub(super) leaf_top: usize,
     pub(super) ref_top: usize,
     pub(super) pending: usize,
@@ -275,6 +284,7 @@ pub(super) fn one_pass<'a>(
 ) -> Result<KdTree<'a>, Error> {
     check_build(scene, params, &storage, &scratch)?;
     let mut b = Builder::new(*scene, params, storage, scratch.events, scratch.prim_flags);
+    b.reserve_shared_empty();
     // Greedy first: the best tree whenever the room suffices. When it ran
     // out, the greedy tree has spent the room on whatever subtrees depth
     // first order reached first; build again sharing it fairly.
@@ -297,7 +307,7 @@ pub(super) fn one_pass<'a>(
         prims: root.prims,
     };
     let (storage, _, _) = b.into_parts();
-    Ok(made.into_tree(scene, storage, params.ropes))
+    Ok(made.into_tree(scene, storage, params))
 }
 
 /// What a build laid out at the start of its storage, before the ropes.
@@ -314,14 +324,15 @@ pub(super) struct Made {
 }
 
 impl Made {
-    /// Ropes (when `with_ropes`), info and the tree over the first counts of
-    /// `storage`.
+    /// Ropes (when `params` asks for them), info and the tree over the
+    /// first counts of `storage`.
     pub(super) fn into_tree<'a>(
         self,
         scene: &Scene<'a>,
         storage: KdStorage<'a>,
-        with_ropes: bool,
+        params: &KdParams,
     ) -> KdTree<'a> {
+        let (with_ropes, compact) = (params.ropes, params.compact);
         let KdStorage {
             nodes,
             ropes,
@@ -343,6 +354,9 @@ impl Made {
         }
         if with_ropes {
             flags |= KD_FLAG_ROPES;
+        }
+        if compact {
+            flags |= KD_FLAG_COMPACT;
         }
         let info = KdInfo {
             magic: KD_MAGIC,
@@ -407,6 +421,7 @@ impl<'s, 'a> Builder<'s, 'a> {
             node_cap,
             leaf_cap,
             node_top: 1,
+            elide: params.compact,
             leaf_top: 0,
             ref_top: 0,
             pending: 0,
@@ -415,6 +430,16 @@ impl<'s, 'a> Builder<'s, 'a> {
             frontier_refs: 0,
             refs_short: 0,
             fair: false,
+        }
+    }
+
+    /// Keeps node [`SHARED_EMPTY`] for the empty leaf that elided children
+    /// stand for, in a compact tree: the one-pass build and a job build's
+    /// top do; a job does not (its nodes join the tree's after it).
+    pub(super) fn reserve_shared_empty(&mut self) {
+        if self.elide {
+            self.nodes[SHARED_EMPTY as usize] = KdNode::EMPTY;
+            self.node_top = first_pair(&self.params);
         }
     }
 
@@ -436,7 +461,7 @@ impl<'s, 'a> Builder<'s, 'a> {
     }
 
     fn restart_fair(&mut self) {
-        self.node_top = 1;
+        self.node_top = first_pair(&self.params);
         self.leaf_top = 0;
         self.ref_top = 0;
         self.pending = 0;
@@ -492,10 +517,12 @@ impl<'s, 'a> Builder<'s, 'a> {
         let mut task = root;
         loop {
             match self.try_split(&task) {
-                Some((left, right)) => {
-                    stack[self.pending] = right;
-                    self.pending += 1;
-                    task = left;
+                Some((next, later)) => {
+                    if let Some(right) = later {
+                        stack[self.pending] = right;
+                        self.pending += 1;
+                    }
+                    task = next;
                 }
                 None => {
                     self.make_leaf(&task);
@@ -651,7 +678,10 @@ impl<'s, 'a> Builder<'s, 'a> {
 
     /// Splits `task` when the termination rule and the room allow; returns
     /// the (left, right) children with their events in place.
-    pub(super) fn try_split(&mut self, task: &Task) -> Option<(Task, Task)> {
+    /// Splits `task`'s node if it pays: the child to build next and the
+    /// one to build after it (none when the other child is an elided empty
+    /// leaf).
+    pub(super) fn try_split(&mut self, task: &Task) -> Option<(Task, Option<Task>)> {
         let n = task.prims;
         if n <= self.params.leaf_size as usize || task.depth >= self.depth_limit {
             return None;
@@ -842,7 +872,7 @@ impl<'s, 'a> Builder<'s, 'a> {
             prims: nr,
             ref_budget: task.ref_budget.saturating_sub(left_budget),
         };
-        Some((left, right))
+        Some((left, Some(right)))
     }
 
     /// [`Self::try_split`] for a plane with no primitive on one side: the
@@ -851,7 +881,11 @@ impl<'s, 'a> Builder<'s, 'a> {
     /// children are written. Same children, same checks and the same tree
     /// as the general path; a top of empty-space cuts (each over all the
     /// events) stays cheap.
-    fn cut_empty_space(&mut self, task: &Task, split: &Split) -> Option<(Task, Task)> {
+    ///
+    /// In a compact tree the empty child is not stored: the node names the
+    /// full child alone ([`KdNode::interior_elided`]), and the empty leaf
+    /// is counted as made.
+    fn cut_empty_space(&mut self, task: &Task, split: &Split) -> Option<(Task, Option<Task>)> {
         let n = task.prims;
         let total = task.total();
         // The general path's room check, for no straddling primitive.
@@ -870,8 +904,13 @@ impl<'s, 'a> Builder<'s, 'a> {
         }
         let (k, p) = (split.axis, split.pos);
         let c = self.node_top as u32;
-        self.node_top += 2;
-        self.nodes[task.node as usize] = KdNode::interior(k, p, c);
+        let elide = self.elide;
+        self.node_top += 2 - elide as usize;
+        self.nodes[task.node as usize] = if elide {
+            KdNode::interior_elided(k, p, c, split.left == 0)
+        } else {
+            KdNode::interior(k, p, c)
+        };
         // The general path's budgets: a left child gets its references and
         // all the spare, a right one what the left leaves.
         let full_budget = if split.left == 0 {
@@ -896,10 +935,18 @@ impl<'s, 'a> Builder<'s, 'a> {
             ref_budget: 0,
         };
         let (lv, rv) = (with_max(&task.voxel, k, p), with_min(&task.voxel, k, p));
+        if elide {
+            // The empty leaf, made where it stands: a leaf of the tree's
+            // count and depth.
+            self.leaf_top += 1;
+            self.depth = self.depth.max(task.depth + 1);
+            let full_voxel = if split.left == 0 { rv } else { lv };
+            return Some((full(c, full_voxel), None));
+        }
         Some(if split.left == 0 {
-            (empty(c, lv), full(c + 1, rv))
+            (empty(c, lv), Some(full(c + 1, rv)))
         } else {
-            (full(c, lv), empty(c + 1, rv))
+            (full(c, lv), Some(empty(c + 1, rv)))
         })
     }
 

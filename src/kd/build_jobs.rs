@@ -29,7 +29,8 @@
 //! let tree = b.finish()?;
 //! ```
 
-use super::build::{check_build, one_pass, Builder, KdEvent, Made, Task, MAX_NODES};
+use super::build::{check_build, first_pair, one_pass, Builder, KdEvent, Made, Task, MAX_NODES};
+use super::node::SHARED_EMPTY;
 use super::node::{KdNode, KD_MAX_DEPTH};
 use super::{KdParams, KdScratch, KdStorage, KdTree};
 use crate::geom::{Aabb, Scene};
@@ -37,6 +38,11 @@ use crate::Error;
 
 /// Most jobs one build makes.
 pub const KD_MAX_JOBS: usize = 32;
+
+/// Most nodes a job build's top holds (the root, the shared empty leaf,
+/// and the children of its splits, of which empty-space cuts without ropes
+/// store one): past it the top makes jobs of what it has.
+const TOP_NODES: usize = 4 * KD_MAX_JOBS;
 
 /// A node becomes a job once it has at most this fraction of the scene's
 /// primitives (plus [`JOB_SLACK`]) when the build is not told how many
@@ -159,6 +165,7 @@ pub fn build_begin_for_threads<'s, 'a>(
 ) -> Result<KdBuild<'s, 'a>, Error> {
     check_build(scene, params, &storage, &scratch)?;
     let mut b = Builder::new(*scene, params, storage, scratch.events, scratch.prim_flags);
+    b.reserve_shared_empty();
     let root = b.root_task();
     let fraction = match threads {
         0 => JOB_FRACTION,
@@ -179,16 +186,19 @@ pub fn build_begin_for_threads<'s, 'a>(
     // the order their subtrees take in the finished tree.
     loop {
         b.pending = count + pending;
-        let split = if task.prims > job_prims && count + pending + 2 <= KD_MAX_JOBS {
+        let room = count + pending + 2 <= KD_MAX_JOBS && b.node_top + 2 <= TOP_NODES;
+        let split = if task.prims > job_prims && room {
             b.try_split(&task)
         } else {
             None
         };
         match split {
-            Some((left, right)) => {
-                stack[pending] = right;
-                pending += 1;
-                task = left;
+            Some((next, later)) => {
+                if let Some(right) = later {
+                    stack[pending] = right;
+                    pending += 1;
+                }
+                task = next;
             }
             None => {
                 // Park the job's events at the top of the free room.
@@ -448,7 +458,7 @@ impl<'s, 'a> KdBuild<'s, 'a> {
         match made {
             Some(made) => {
                 report.one_pass = false;
-                Ok((made.into_tree(&scene, storage, params.ropes), report))
+                Ok((made.into_tree(&scene, storage, &params), report))
             }
             None => {
                 report.fair_pass_only = greedy_runs_out(specs, done, storage.refs.len());
@@ -565,13 +575,17 @@ impl Layout<'_, '_, '_> {
     /// place. None when a job fails again. `bounds` and `prims` are the
     /// root's.
     fn assemble(&mut self, top_nodes: usize, bounds: Aabb, prims: usize) -> Option<Made> {
-        let mut top = [KdNode::default(); 2 * KD_MAX_JOBS];
+        let mut top = [KdNode::default(); TOP_NODES];
         top[..top_nodes].copy_from_slice(&self.storage.nodes[..top_nodes]);
         // (top node, its slot in the finished tree)
-        let mut stack = [(0usize, 0usize); 2 * KD_MAX_JOBS];
+        let mut stack = [(0usize, 0usize); TOP_NODES];
         let mut sp = 1;
+        let first = first_pair(&self.params);
+        if first > SHARED_EMPTY as usize {
+            self.storage.nodes[SHARED_EMPTY as usize] = KdNode::EMPTY;
+        }
         let mut at = Tops {
-            node: 1,
+            node: first,
             leaf: 0,
             re: 0,
         };
@@ -582,12 +596,15 @@ impl Layout<'_, '_, '_> {
             let n = top[t];
             if !n.is_leaf() {
                 let c = at.node;
-                at.node += 2;
-                self.storage.nodes[slot] = KdNode::interior(n.axis(), n.split(), c as u32);
-                let l = n.left() as usize;
-                stack[sp] = (l + 1, c + 1);
-                stack[sp + 1] = (l, c);
-                sp += 2;
+                at.node += n.stored_children() as usize;
+                self.storage.nodes[slot] = n.with_first_stored(c as u32);
+                let l = n.first_stored() as usize;
+                if n.elided() == 0 {
+                    stack[sp] = (l + 1, c + 1);
+                    sp += 1;
+                }
+                stack[sp] = (l, c);
+                sp += 1;
                 continue;
             }
             let j = n.first_ref() as usize;
@@ -622,7 +639,7 @@ impl Layout<'_, '_, '_> {
             if r.is_leaf() {
                 KdNode::leaf(r.first_ref() + rb, r.ref_count())
             } else {
-                KdNode::interior(r.axis(), r.split(), r.left() - 1 + nb)
+                r.with_first_stored(r.first_stored() - 1 + nb)
             }
         };
         nodes[slot] = moved(nodes[s.nodes.start]);

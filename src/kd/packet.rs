@@ -27,7 +27,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::node::{KdRopes, KdStackItem, KD_STACK_LEN};
-use super::traverse::{inside_leaf, Steps};
+use super::traverse::{children, inside_leaf, Steps};
 use super::KdTree;
 use crate::geom::lanes::{F8, M8};
 use crate::geom::leaf::beats;
@@ -754,14 +754,19 @@ impl KdTree<'_> {
         // step), counted once at the end: a per-step count of the mask's
         // lanes cost some thirty instructions of every step.
         let mut lane_steps = [0u32; LANES];
-        self.walk_packet_counted(p, v, stack, steps, &mut lane_steps);
+        // A compact tree's walk chosen once (its nodes' children decoded).
+        if self.info.is_compact() {
+            self.walk_packet_counted::<V, true>(p, v, stack, steps, &mut lane_steps);
+        } else {
+            self.walk_packet_counted::<V, false>(p, v, stack, steps, &mut lane_steps);
+        }
         steps.interior += lane_steps.iter().map(|&n| n as u64).sum::<u64>();
     }
 
     /// [`KdTree::walk_packet`], adding each interior node's active lanes
     /// to `lane_steps`.
     #[inline(always)]
-    fn walk_packet_counted<V: PacketVisitor>(
+    fn walk_packet_counted<V: PacketVisitor, const COMPACT: bool>(
         &self,
         p: &Packet,
         v: &mut V,
@@ -796,8 +801,8 @@ impl KdTree<'_> {
                 for (n, &m) in lane_steps.iter_mut().zip(on.0.iter()) {
                     *n += m & 1;
                 }
-                let (a, s, left) = (nd.axis(), nd.split(), nd.left());
-                let right = left.wrapping_add(1);
+                let (a, s) = (nd.axis(), nd.split());
+                let (left, right) = children::<COMPACT>(nd);
                 let (near, far) = if p.up[a] {
                     (left, right)
                 } else {

@@ -328,6 +328,7 @@ impl<'a> KdTree<'a> {
     /// would visit more nodes than the tree has, or push past the stack,
     /// meets a broken tree: it stops with a fault.
     #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
     pub(crate) fn walk_from<V: LeafVisitor, R: Recorder>(
         &self,
         v: &mut V,
@@ -338,9 +339,14 @@ impl<'a> KdTree<'a> {
         t1: f32,
         steps: &mut Steps,
     ) -> bool {
-        // The counters live in registers during the walk.
+        // The counters live in registers during the walk; a compact tree's
+        // walk is chosen here, once (its nodes need their children decoded).
         let mut counted = *steps;
-        let stopped = self.walk_counted(v, rec, stack, start, t0, t1, &mut counted);
+        let stopped = if self.info.is_compact() {
+            self.walk_counted::<V, R, true>(v, rec, stack, start, t0, t1, &mut counted)
+        } else {
+            self.walk_counted::<V, R, false>(v, rec, stack, start, t0, t1, &mut counted)
+        };
         *steps = counted;
         stopped
     }
@@ -348,7 +354,7 @@ impl<'a> KdTree<'a> {
     /// [`KdTree::walk_from`] on counters it may keep in registers.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn walk_counted<V: LeafVisitor, R: Recorder>(
+    fn walk_counted<V: LeafVisitor, R: Recorder, const COMPACT: bool>(
         &self,
         v: &mut V,
         rec: &mut R,
@@ -397,7 +403,8 @@ impl<'a> KdTree<'a> {
                     break 'walk true;
                 }
                 budget -= 1;
-                let (a, s, left) = (nd.axis() & 3, nd.split(), nd.left());
+                let (a, s) = (nd.axis() & 3, nd.split());
+                let (left, right) = children::<COMPACT>(nd);
                 // Where the ray meets the plane: the segment [en_t, ex_t]
                 // lies on one side of it, or crosses it there.
                 // A ray parallel to the plane stays on its origin's side
@@ -414,7 +421,6 @@ impl<'a> KdTree<'a> {
                 } else {
                     (f32::NAN, false)
                 };
-                let right = left.wrapping_add(1);
                 let (near, far) = if up { (left, right) } else { (right, left) };
                 let (near_only, far_only, both) = if up {
                     (Decision::Left, Decision::Right, Decision::LeftRight)
@@ -524,11 +530,12 @@ impl<'a> KdTree<'a> {
                 return Some(node);
             }
             steps.interior += 1;
-            let (a, s, left) = (nd.axis(), nd.split(), nd.left());
+            // Trees with ropes store both children (never compact).
+            let (a, s, (left, right)) = (nd.axis(), nd.split(), children::<false>(nd));
             node = if p[a] < s {
                 left
             } else if p[a] > s {
-                left.wrapping_add(1)
+                right
             } else {
                 return None;
             };
@@ -557,7 +564,7 @@ impl<'a> KdTree<'a> {
                 return Some(node);
             }
             steps.interior += 1;
-            let (a, s, left) = (nd.axis(), nd.split(), nd.left());
+            let (a, s, (left, right)) = (nd.axis(), nd.split(), children::<false>(nd));
             let (o, d) = (r.origin[a], r.dir[a]);
             let below = if d == 0.0 {
                 if o == s {
@@ -572,7 +579,7 @@ impl<'a> KdTree<'a> {
                 }
                 (d > 0.0) == (t < ts)
             };
-            node = if below { left } else { left.wrapping_add(1) };
+            node = if below { left } else { right };
         }
         Some(NO_NODE)
     }
@@ -738,6 +745,18 @@ impl<'a> KdTree<'a> {
             RopeEnd::Exited => false,
             RopeEnd::Fallback => self.walk_hierarchical(v, &mut NoRecord, stack, steps),
         }
+    }
+}
+
+/// An interior node's children: in a compact tree an elided one as the
+/// shared empty leaf ([`KdNode::children`]), elsewhere the stored pair.
+#[inline(always)]
+pub(crate) fn children<const COMPACT: bool>(nd: KdNode) -> (u32, u32) {
+    if COMPACT {
+        nd.children()
+    } else {
+        let left = nd.left();
+        (left, left.wrapping_add(1))
     }
 }
 

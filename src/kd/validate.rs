@@ -10,7 +10,7 @@
 //! no arena, however broken, makes them panic; they take time linear in
 //! the arena (times the depth, at most 60, for the ropes).
 
-use super::node::{KdNode, KD_MAX_DEPTH, NO_NODE};
+use super::node::{KdNode, KD_MAX_DEPTH, NO_NODE, SHARED_EMPTY};
 use super::KdTree;
 use crate::geom::Aabb;
 use crate::Error;
@@ -18,7 +18,8 @@ use crate::Error;
 /// What a valid tree looks like in numbers.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct KdTreeStats {
-    /// Nodes, interior and leaf.
+    /// Nodes stored, interior and leaf (the shared empty leaf of a tree
+    /// without ropes among them).
     pub nodes: u32,
     /// Leaves.
     pub leaves: u32,
@@ -84,7 +85,19 @@ impl<'a> KdTree<'a> {
         let mut stack = [(0u32, 0u32, Aabb::EMPTY); KD_MAX_DEPTH as usize + 2];
         stack[0] = (0, 0, root);
         let mut sp = 1;
+        // A compact tree's node 1 is the shared empty leaf elided children
+        // stand for, and the children start after it; only a tree without
+        // ropes may be compact.
         let mut next_pair = 1u32;
+        if info.is_compact() {
+            if info.has_ropes() {
+                return Err(corrupt("compact with ropes"));
+            }
+            if self.nodes.get(SHARED_EMPTY as usize) != Some(&KdNode::EMPTY) {
+                return Err(corrupt("shared empty leaf"));
+            }
+            next_pair = SHARED_EMPTY + 1;
+        }
         let mut next_leaf = 0u32;
         let mut next_ref = 0u32;
         let mut sah = 0.0f64;
@@ -137,14 +150,20 @@ impl<'a> KdTree<'a> {
                 }
                 continue;
             }
-            let (a, s, left) = (nd.axis(), nd.split(), nd.left());
-            if left != next_pair || left as u64 + 1 >= info.node_count as u64 {
+            let (a, s, left) = (nd.axis(), nd.split(), nd.first_stored());
+            // Only a compact tree leaves empty leaves out.
+            let elided = nd.elided();
+            if elided == 3 || (elided != 0 && !info.is_compact()) {
+                return Err(corrupt("elided child"));
+            }
+            let stored = nd.stored_children();
+            if left != next_pair || left as u64 + stored as u64 > info.node_count as u64 {
                 return Err(corrupt("node order"));
             }
             if info.has_ropes() && self.rope_ids.get(ni as usize) != Some(&NO_NODE) {
                 return Err(corrupt("rope index"));
             }
-            next_pair += 2;
+            next_pair += stored;
             if !(s > b.min[a] && s < b.max[a]) {
                 return Err(corrupt("split outside its node"));
             }
@@ -156,6 +175,19 @@ impl<'a> KdTree<'a> {
             lb.max[a] = s;
             let mut rb = b;
             rb.min[a] = s;
+            if elided != 0 {
+                // The empty leaf left out: counted, nothing to check in it.
+                if depth + 1 > info.depth {
+                    return Err(corrupt("depth"));
+                }
+                st.leaves += 1;
+                st.empty_leaves += 1;
+                st.depth = st.depth.max(depth + 1);
+                next_leaf += 1;
+                stack[sp] = (left, depth + 1, if elided == 1 { rb } else { lb });
+                sp += 1;
+                continue;
+            }
             stack[sp] = (left + 1, depth + 1, rb);
             stack[sp + 1] = (left, depth + 1, lb);
             sp += 2;

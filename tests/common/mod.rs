@@ -268,3 +268,34 @@ pub fn lattice_corners() -> (OwnedScene, Vec<Ray>) {
     }
     (o, rays)
 }
+
+/// The nodes of a tree without ropes with its elided empty leaves put
+/// back, laid out as a build with ropes lays them out: children pairs in
+/// the preorder of their parents, an empty leaf's first reference where
+/// the references stand at it.
+pub fn with_empty_leaves(nodes: &[coray::kd::KdNode]) -> Vec<coray::kd::KdNode> {
+    let mut out = vec![coray::kd::KdNode::default()];
+    let mut next_ref = 0;
+    // (node of `nodes`, or None for an elided leaf; its slot in `out`)
+    let mut stack = vec![(Some(0usize), 0usize)];
+    while let Some((node, slot)) = stack.pop() {
+        let Some(i) = node else {
+            out[slot] = coray::kd::KdNode::leaf(next_ref, 0);
+            continue;
+        };
+        let n = nodes[i];
+        if n.is_leaf() {
+            next_ref = n.first_ref() + n.ref_count();
+            out[slot] = n;
+            continue;
+        }
+        let c = out.len();
+        out.extend([coray::kd::KdNode::default(); 2]);
+        out[slot] = coray::kd::KdNode::interior(n.axis(), n.split(), c as u32);
+        let (l, r) = n.children();
+        let stored = |x: u32| (x != coray::kd::SHARED_EMPTY).then_some(x as usize);
+        stack.push((stored(r), c + 1));
+        stack.push((stored(l), c));
+    }
+    out
+}

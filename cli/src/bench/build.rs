@@ -63,7 +63,7 @@ pub struct BuildRow {
 }
 
 /// The methods of the traversal columns.
-const TRACE_METHODS: [&str; 2] = ["kd", "kd-packet"];
+const TRACE_METHODS: [&str; 4] = ["kd", "kd-packet", "kd-compact", "kd-compact-packet"];
 
 /// Primary rays through kd-auto's tree (hierarchical, packets) and
 /// Embree's, one thread, methods interleaved, best of `repeat`; each
@@ -207,6 +207,7 @@ pub fn run(s: &crate::scene::SceneData, repeat: usize, threads: usize) -> Result
         builders.push(Box::new(move |sc| kd(sc, Preset::Auto, &name, threads)));
     }
     builders.push(Box::new(|sc| kd(sc, Preset::Paper, "kd-paper", 1)));
+    builders.push(Box::new(|sc| kd(sc, Preset::Compact, "kd-compact", 1)));
     builders.push(Box::new(tdbs_sah));
     builders.push(Box::new(wide));
     #[cfg(feature = "embree")]
@@ -248,12 +249,14 @@ columns: prims = primitives after triangulation; per builder: ms = best build ti
   tree is byte for byte the one-thread build's; a build that runs out of room falls back
   to one pass on one thread); x = kd-auto's time over Embree's at one thread, xN = at N.
   kd-auto keeps no ropes (hierarchical and packet traversal need none; with ropes, for
-  rope traversal and the LCTS casts, a leaf takes 48 bytes more); kd-paper keeps them.
+  rope traversal and the LCTS casts, a leaf takes 48 bytes more); kd-paper keeps them;
+  kd-compact = kd-auto's tree without its empty leaves beside full ones.
   wide = tdbs-sah's sweep with a triangle priced at half a sphere's test (leaves of up to
   4 where the SAH prices them lower), collapsed into 4-wide nodes; its +s holds the binary
   hierarchy and the node room the collapse did not use. Primary Mr/s: the scene's primary rays (one per pixel at --res, in 4 x 2 pixel
   blocks) on one thread through kd-auto's tree, hierarchical (kd) and in packets
-  (kd-packet), and through Embree's scene (e1 = rtcIntersect1, e8 = rtcIntersect8); best
+  (kd-packet), through kd-compact's alike (kd-compact, kd-compact-packet: the same
+  steps, and each node's children decoded), and through Embree's scene (e1 = rtcIntersect1, e8 = rtcIntersect8); best
   of --repeat runs, methods interleaved; mism = rays answering otherwise than kd.";
 
 /// Prints the rows.

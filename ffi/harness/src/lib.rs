@@ -389,9 +389,10 @@ fn kd(
         CORAY_KD_PRESET_AUTO
     };
     let mut params = coray_kdtree_params_default(preset);
-    // Auto trees with ropes and without (their casts then return NO_ROPES).
+    // Auto trees with ropes, without (their casts then return NO_ROPES),
+    // and compact (without, and without the empty leaves beside full ones).
     if !paper {
-        params.omit_ropes = (inp.u8() & 1) as u32;
+        params.omit_ropes = (inp.u8() % 3) as u32;
     }
     let mut req = requirements();
     // SAFETY: params and req are live locals with struct_size set.
