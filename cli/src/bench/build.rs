@@ -253,11 +253,12 @@ columns: prims = primitives after triangulation; per builder: ms = best build ti
   kd-compact = kd-auto's tree without its empty leaves beside full ones.
   wide = tdbs-sah's sweep with a triangle priced at half a sphere's test (leaves of up to
   4 where the SAH prices them lower), collapsed into 4-wide nodes; its +s holds the binary
-  hierarchy and the node room the collapse did not use. Primary Mr/s: the scene's primary rays (one per pixel at --res, in 4 x 2 pixel
-  blocks) on one thread through kd-auto's tree, hierarchical (kd) and in packets
-  (kd-packet), through kd-compact's alike (kd-compact, kd-compact-packet: the same
-  steps, and each node's children decoded), and through Embree's scene (e1 = rtcIntersect1, e8 = rtcIntersect8); best
-  of --repeat runs, methods interleaved; mism = rays answering otherwise than kd.";
+  hierarchy and the node room the collapse did not use. Primary Mr/s: the scene's
+  primary rays (one per pixel at --res, in 4 x 2 pixel blocks) on one thread through
+  kd-auto's tree, hierarchical (kd) and in packets (kd-packet), through kd-compact's
+  alike (kd-compact, kd-compact-packet: the same steps, each node's children decoded),
+  and through Embree's scene (e1 = rtcIntersect1, e8 = rtcIntersect8); best of
+  --repeat runs, methods interleaved; mism = rays answering otherwise than kd.";
 
 /// Prints the rows.
 pub fn print(rows: &[BuildRow]) {
