@@ -328,7 +328,7 @@ impl<'a> KdTree<'a> {
     /// would visit more nodes than the tree has, or push past the stack,
     /// meets a broken tree: it stops with a fault.
     #[allow(clippy::too_many_arguments)]
-    #[inline(always)]
+    #[inline]
     pub(crate) fn walk_from<V: LeafVisitor, R: Recorder>(
         &self,
         v: &mut V,
