@@ -5,6 +5,12 @@
 /// 2-bit kind.
 pub const MAX_PRIMS: usize = 1 << 30;
 
+/// Nodes a kd-tree holds: 2^28 (2 GiB of them, half the largest arena).
+/// An interior node's word keeps its axis (2 bits) and a compact tree's
+/// flags of a child left out (2 bits) beside a 28-bit child index; a build
+/// that would need more stops splitting there (truncated).
+pub const KD_MAX_NODES: usize = 1 << 28;
+
 /// Bytes any arena may span: its parts are found by 32-bit offsets, so an
 /// arena can be saved and mapped at any address of any target.
 pub const MAX_ARENA_BYTES: usize = u32::MAX as usize;

@@ -175,7 +175,7 @@ pub(super) fn first_pair(params: &KdParams) -> usize {
 }
 
 /// Most nodes a tree holds: child indices live in 28 bits.
-pub(super) const MAX_NODES: usize = super::node::MAX_CHILD_INDEX as usize;
+pub(super) const MAX_NODES: usize = crate::limits::KD_MAX_NODES;
 
 pub(super) struct Builder<'s, 'a> {
     scene: Scene<'a>,

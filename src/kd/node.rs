@@ -58,8 +58,9 @@ pub struct KdNode {
 /// ([`KdNode::children`]).
 pub const SHARED_EMPTY: u32 = 1;
 
-/// Interior nodes' child indices are below this: 28 bits of `word`.
-pub const MAX_CHILD_INDEX: u32 = 1 << 28;
+/// Interior nodes' child indices are below this: 28 bits of `word`
+/// ([`crate::limits::KD_MAX_NODES`]).
+pub const MAX_CHILD_INDEX: u32 = crate::limits::KD_MAX_NODES as u32;
 
 /// Bit of an interior node's word: its left child is elided.
 const ELIDED_LEFT: u32 = 4;
