@@ -52,6 +52,19 @@ pub fn ref_digest(refs: impl Iterator<Item = u32>) -> u64 {
     refs.fold(0u64, |d, p| d.wrapping_add(ref_mix(p)))
 }
 
+/// The digest of a kd-tree's nodes, in order: each node's two words mixed
+/// into the running value. Builds record it; `validate` recomputes it,
+/// which catches a corrupted node with probability 1 - 2^-64 (not a
+/// crafted arena). Its splits need it in a tree without ropes: a split
+/// moved within its node's box keeps every reference touching its leaf's
+/// box, yet leaves primitives out of the cells it moves over, and no rope
+/// record pins the leaf boxes there.
+pub fn node_digest(nodes: impl Iterator<Item = (u32, u32)>) -> u64 {
+    nodes.fold(0x6B64_4E4F_4445_5331, |d, (word, data)| {
+        mix64(d ^ (((word as u64) << 32) | data as u64))
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

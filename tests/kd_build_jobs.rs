@@ -222,6 +222,7 @@ fn job_build_equals_depth_first_on_spd_scenes_whose_trees_are_pinned() {
             KdInfo {
                 flags: auto.info.flags | kd::KD_FLAG_COMPACT,
                 node_count: compact.info.node_count,
+                node_digest: compact.info.node_digest,
                 ..auto.info
             },
             compact.info,

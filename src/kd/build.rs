@@ -376,6 +376,10 @@ impl Made {
                 let d = crate::rng::ref_digest(refs.iter().copied());
                 [d as u32, (d >> 32) as u32]
             },
+            node_digest: {
+                let d = crate::rng::node_digest(nodes.iter().map(|n| (n.word, n.data)));
+                [d as u32, (d >> 32) as u32]
+            },
         };
         KdTree {
             scene: *scene,

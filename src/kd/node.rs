@@ -252,7 +252,7 @@ impl KdRopes {
 /// Magic word of a kd-tree's [`KdInfo`]: "CRKD".
 pub const KD_MAGIC: u32 = u32::from_le_bytes(*b"CRKD");
 /// Layout version of [`KdInfo`] and the node types.
-pub const KD_VERSION: u32 = 5;
+pub const KD_VERSION: u32 = 6;
 
 /// Flag in [`KdInfo::flags`]: a capacity stopped splitting somewhere.
 pub const KD_FLAG_TRUNCATED: u32 = 1;
@@ -299,12 +299,19 @@ pub struct KdInfo {
     pub bounds_max: [f32; 3],
     /// [`crate::rng::ref_digest`] of the references, low and high words.
     pub ref_digest: [u32; 2],
+    /// [`crate::rng::node_digest`] of the nodes, low and high words.
+    pub node_digest: [u32; 2],
 }
 
 impl KdInfo {
     /// The recorded reference digest.
     pub fn ref_digest(&self) -> u64 {
         self.ref_digest[0] as u64 | (self.ref_digest[1] as u64) << 32
+    }
+
+    /// The recorded node digest.
+    pub fn node_digest(&self) -> u64 {
+        self.node_digest[0] as u64 | (self.node_digest[1] as u64) << 32
     }
 
     /// Root box.

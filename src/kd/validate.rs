@@ -48,7 +48,9 @@ impl<'a> KdTree<'a> {
     /// splits strictly inside their node's box, depth within the recorded
     /// depth, reference ranges and rope records consecutive, every
     /// reference naming a non-degenerate primitive that touches its leaf's
-    /// box, the references' digest as recorded, leaf boxes equal to the
+    /// box, the references' and the nodes' digests as recorded (a split
+    /// moved within its box keeps the references consistent, and only the
+    /// nodes' digest, or a tree's rope records, tell), leaf boxes equal to the
     /// ones implied by the splits, and every rope leading to a node whose
     /// box covers that face from outside. Returns the tree's figures.
     /// `cost_traversal` and `cost_intersection` weight the SAH cost in the
@@ -203,6 +205,12 @@ impl<'a> KdTree<'a> {
         }
         if digest != info.ref_digest() {
             return Err(corrupt("reference digest"));
+        }
+        // Splits moved within their boxes keep the references consistent:
+        // the nodes are what the build made.
+        let nodes = crate::rng::node_digest(self.nodes.iter().map(|n| (n.word, n.data)));
+        if nodes != info.node_digest() {
+            return Err(corrupt("node digest"));
         }
         // The nodes form one tree of the recorded depth, every leaf's box
         // is the one its splits imply: the ropes can be walked.
