@@ -489,14 +489,29 @@ unsafe fn tree_of<'a>(h: Sealed, scene: coray::Scene<'a>) -> Result<KdTree<'a>, 
 }
 
 /// The tree a handle describes whose header and parts passed [`tree_of`]'s
-/// checks when a tracer was made: nothing is checked again.
+/// checks when a tracer was made: nothing is checked again, and the parts
+/// are cut to the header's counts as [`KdTree::from_parts`] cuts them (the
+/// arena's parts run to their capacities: a header whose counts were
+/// damaged below them was once traced over the whole capacities here and
+/// over the counts by the one-ray call, and the two answered otherwise;
+/// found by the C-ABI fuzzer, `fuzz/regressions/kd-tracer-damaged-count`).
 ///
 /// Safety: as [`parts_of`].
 #[inline(always)]
 unsafe fn known_tree_of<'a>(h: Sealed, scene: coray::Scene<'a>) -> KdTree<'a> {
     // SAFETY: forwarded contract.
     let (info, nodes, ropes, rope_ids, refs) = unsafe { parts_of(h) };
-    KdTree::from_checked_parts(scene, info, nodes, ropes, rope_ids, refs)
+    fn first<T>(s: &[T], n: u32) -> &[T] {
+        &s[..(n as usize).min(s.len())]
+    }
+    KdTree::from_checked_parts(
+        scene,
+        info,
+        first(nodes, info.node_count),
+        first(ropes, info.rope_count()),
+        first(rope_ids, info.rope_id_count()),
+        first(refs, info.ref_count),
+    )
 }
 
 /// The tree behind a caller's handle, its buffers noted in `regions`.
