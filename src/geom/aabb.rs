@@ -1,4 +1,4 @@
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 
 /// An axis-aligned box. An empty box has `min > max` on some axis.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -62,7 +62,13 @@ impl Aabb {
 
     /// Parameter interval `[t0, t1]` of the ray inside the box, clipped to
     /// `[t_min, t_max]`; `None` when the ray misses. A ray parallel to an
-    /// axis is inside that slab when its origin is, faces included.
+    /// axis (its inverse direction infinite) is inside that slab when its
+    /// origin is, faces included; a NaN bound is passed over.
+    ///
+    /// Every traversal clips every ray to the scene's box, so the three
+    /// slabs go at once on SIMD lanes: the same products, the same
+    /// comparisons and the same extremes as one axis after the other
+    /// (`tests::clip_ray_is_the_slab_test_axis_by_axis`).
     #[inline]
     pub fn clip_ray(
         &self,
@@ -71,21 +77,25 @@ impl Aabb {
         t_min: f32,
         t_max: f32,
     ) -> Option<(f32, f32)> {
-        let mut t0 = t_min;
-        let mut t1 = t_max;
-        for a in 0..3 {
-            if inv_dir[a].is_infinite() {
-                if origin[a] < self.min[a] || origin[a] > self.max[a] {
-                    return None;
-                }
-                continue;
-            }
-            let lo = (self.min[a] - origin[a]) * inv_dir[a];
-            let hi = (self.max[a] - origin[a]) * inv_dir[a];
-            let (n, f) = if lo <= hi { (lo, hi) } else { (hi, lo) };
-            t0 = t0.max(n);
-            t1 = t1.min(f);
+        let (o, inv) = (Vec3A::from(origin), Vec3A::from(inv_dir));
+        let (bmin, bmax) = (Vec3A::from(self.min), Vec3A::from(self.max));
+        let parallel = inv.abs().cmpeq(Vec3A::INFINITY);
+        if (parallel & (o.cmplt(bmin) | o.cmpgt(bmax))).any() {
+            return None;
         }
+        if parallel.all() {
+            return (t_min <= t_max).then_some((t_min, t_max));
+        }
+        let lo = (bmin - o) * inv;
+        let hi = (bmax - o) * inv;
+        let order = lo.cmple(hi);
+        let (n, f) = (Vec3A::select(order, lo, hi), Vec3A::select(order, hi, lo));
+        // Parallel axes bound nothing, nor does a NaN bound (`f32::max`
+        // and `min` pass over one).
+        let n = Vec3A::select(parallel | n.cmpne(n), Vec3A::NEG_INFINITY, n);
+        let f = Vec3A::select(parallel | f.cmpne(f), Vec3A::INFINITY, f);
+        let t0 = t_min.max(n.max_element());
+        let t1 = t_max.min(f.min_element());
         if t0 <= t1 {
             Some((t0, t1))
         } else {
@@ -103,5 +113,79 @@ pub(crate) fn pad_rounding(b: &Aabb) -> Aabb {
     Aabb {
         min: b.min - e,
         max: b.max + e,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::SplitMix64;
+
+    /// The slab test one axis after the other, as `clip_ray` once was.
+    fn axis_by_axis(b: &Aabb, o: Vec3, inv: Vec3, t_min: f32, t_max: f32) -> Option<(f32, f32)> {
+        let (mut t0, mut t1) = (t_min, t_max);
+        for a in 0..3 {
+            if inv[a].is_infinite() {
+                if o[a] < b.min[a] || o[a] > b.max[a] {
+                    return None;
+                }
+                continue;
+            }
+            let lo = (b.min[a] - o[a]) * inv[a];
+            let hi = (b.max[a] - o[a]) * inv[a];
+            let (n, f) = if lo <= hi { (lo, hi) } else { (hi, lo) };
+            t0 = t0.max(n);
+            t1 = t1.min(f);
+        }
+        (t0 <= t1).then_some((t0, t1))
+    }
+
+    #[test]
+    fn clip_ray_is_the_slab_test_axis_by_axis() {
+        let specials = [
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            0.5,
+            1e-40,
+            3e38,
+            -3e38,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+        ];
+        let mut g = SplitMix64(5);
+        let pick = |g: &mut SplitMix64, p: f32| {
+            if g.next_f32() < p {
+                specials[(g.next_u64() % specials.len() as u64) as usize]
+            } else {
+                g.next_f32() * 4.0 - 2.0
+            }
+        };
+        let (mut some, mut none) = (0, 0);
+        for i in 0..300_000 {
+            let mut v = [0.0f32; 14];
+            for x in v.iter_mut() {
+                *x = pick(&mut g, 0.1);
+            }
+            let b = Aabb {
+                min: Vec3::new(v[0], v[1], v[2]).min(Vec3::new(v[3], v[4], v[5])),
+                max: Vec3::new(v[0], v[1], v[2]).max(Vec3::new(v[3], v[4], v[5])),
+            };
+            let (o, d) = (Vec3::new(v[6], v[7], v[8]), Vec3::new(v[9], v[10], v[11]));
+            let inv = Vec3::ONE / d;
+            let (t_min, t_max) = (v[12], v[13]);
+            let want = axis_by_axis(&b, o, inv, t_min, t_max);
+            let got = b.clip_ray(o, inv, t_min, t_max);
+            // Equal values (a zero's sign may differ: max of +0 and -0).
+            let same = |a: f32, b: f32| a == b || (a.is_nan() && b.is_nan());
+            match (want, got) {
+                (None, None) => none += 1,
+                (Some(w), Some(h)) if same(w.0, h.0) && same(w.1, h.1) => some += 1,
+                _ => panic!("case {i}: {b:?} {o} {inv} [{t_min}, {t_max}]: {want:?} {got:?}"),
+            }
+        }
+        assert!(some > 10_000 && none > 10_000, "{some} {none}");
     }
 }

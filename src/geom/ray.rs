@@ -33,12 +33,16 @@ impl Ray {
 
     /// True when the ray can hit anything: finite origin and direction, a
     /// non-zero direction and a non-empty, non-NaN interval.
+    ///
+    /// Every traversal asks this of every ray, so it is branch-light: `x *
+    /// 0.0` is a zero for finite `x` and NaN for an infinite or NaN one, so
+    /// one sum of the six products is zero exactly when all six components
+    /// are finite; `t_min <= t_max` is false when either is NaN.
+    #[inline]
     pub fn is_valid(&self) -> bool {
-        self.origin.is_finite()
-            && self.dir.is_finite()
-            && self.dir != Vec3::ZERO
-            && self.t_min <= self.t_max
-            && !self.t_min.is_nan()
+        let (o, d) = (self.origin, self.dir);
+        let zeros = (o.x * 0.0 + o.y * 0.0) + (o.z * 0.0 + d.x * 0.0) + (d.y * 0.0 + d.z * 0.0);
+        zeros == 0.0 && (d.x != 0.0) | (d.y != 0.0) | (d.z != 0.0) && self.t_min <= self.t_max
     }
 }
 
@@ -117,13 +121,12 @@ impl PreparedRay {
     pub fn new(ray: &Ray) -> PreparedRay {
         let d = ray.dir;
         let a = d.abs();
-        let kz = if a.x >= a.y && a.x >= a.z {
-            0
-        } else if a.y >= a.z {
-            1
-        } else {
-            2
-        };
+        // The largest component's axis, x before y before z on ties, without
+        // branches (incoherent rays would mispredict them): 0 when x wins,
+        // else 1 when y wins, else 2.
+        let x_wins = (a.x >= a.y) & (a.x >= a.z);
+        let y_wins = a.y >= a.z;
+        let kz = (!x_wins) as usize * (1 + (!y_wins) as usize);
         const NEXT: [usize; 3] = [1, 2, 0];
         let dk = d.to_array();
         let (mut kx, mut ky) = (NEXT[kz], NEXT[NEXT[kz]]);
@@ -187,6 +190,65 @@ mod tests {
             inv,
             [d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]],
         )
+    }
+
+    /// `is_valid` answers as its definition, component by component, on
+    /// rays whose fields are drawn from the values that decide it
+    /// (infinities, NaN, signed zeros, subnormals, huge and plain values).
+    #[test]
+    fn is_valid_is_its_definition() {
+        let definition = |r: &Ray| {
+            r.origin.is_finite()
+                && r.dir.is_finite()
+                && r.dir != Vec3::ZERO
+                && r.t_min <= r.t_max
+                && !r.t_min.is_nan()
+        };
+        let values = [
+            0.0,
+            -0.0,
+            1e-40,
+            -1e-40,
+            1.0,
+            -2.5,
+            3e38,
+            -3e38,
+            f32::MAX,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+        ];
+        let mut g = SplitMix64(11);
+        let (mut valid, mut invalid) = (0, 0);
+        for _ in 0..200_000 {
+            let mut f = [0.0f32; 8];
+            for v in f.iter_mut() {
+                // Mostly plain values, so that one special decides.
+                *v = if g.next_f32() < 0.15 {
+                    values[(g.next_u64() % values.len() as u64) as usize]
+                } else {
+                    g.next_f32() * 2.0 - 1.0
+                };
+            }
+            let r = Ray::new(
+                Vec3::new(f[0], f[1], f[2]),
+                Vec3::new(f[3], f[4], f[5]),
+                f[6],
+                f[7],
+            );
+            let want = definition(&r);
+            assert_eq!(r.is_valid(), want, "{r:?}");
+            if want {
+                valid += 1;
+            } else {
+                invalid += 1;
+            }
+        }
+        // Both answers occur often, the zero direction among them.
+        assert!(valid > 20_000 && invalid > 20_000, "{valid} {invalid}");
+        assert!(!Ray::new(Vec3::ONE, Vec3::ZERO, 0.0, 1.0).is_valid());
+        assert!(!Ray::new(Vec3::ONE, -Vec3::ZERO, 0.0, 1.0).is_valid());
+        assert!(Ray::new(Vec3::ONE, Vec3::new(0.0, -1e-40, 0.0), 0.0, 0.0).is_valid());
     }
 
     #[test]
