@@ -128,9 +128,10 @@ fn packets_answer_as_hierarchical_traversal() {
     }
 }
 
-/// Rays with a zero direction component, invalid rays and a short tail
-/// group: packets take what they can, the rest goes ray by ray, answers
-/// unchanged.
+/// Rays with a zero direction component, invalid rays (a packet's first
+/// lane, an infinite origin, a NaN direction, NaN and reversed intervals,
+/// a whole packet of them) and a short tail group: packets take what they
+/// can, the rest goes ray by ray, answers unchanged.
 #[test]
 fn packets_with_odd_lanes() {
     let mut rng = Rng(9);
@@ -142,6 +143,12 @@ fn packets_with_odd_lanes() {
     rays[3].dir.x = 0.0;
     rays[12] = Ray::new(Vec3::ZERO, Vec3::ZERO, 0.0, 1.0);
     rays[21].t_min = f32::NAN;
+    rays[0].t_max = -1.0;
+    rays[5].origin.y = f32::INFINITY;
+    rays[9].dir.z = f32::NAN;
+    for r in &mut rays[24..32] {
+        (r.t_min, r.t_max) = (2.0, 1.0);
+    }
     rays.truncate(rays.len() - 3);
     same_as_hierarchical(&t, &rays, "odd lanes");
 }

@@ -95,6 +95,17 @@ impl Packet {
         k: [0, 1, 2],
     };
 
+    /// Lane `i` holds ray `r`.
+    #[inline(always)]
+    fn set_lane(&mut self, i: usize, r: &Ray) {
+        for a in 0..3 {
+            self.o[a].0[i] = r.origin[a];
+            self.d[a].0[i] = r.dir[a];
+        }
+        self.t_min.0[i] = r.t_min;
+        self.t_max.0[i] = r.t_max;
+    }
+
     /// Loads `rays` (at most 8; missing and invalid lanes are off), with
     /// the unit directions when the scene is `curved` (has spheres or
     /// cones). False when they do not move alike: a direction component
@@ -102,26 +113,40 @@ impl Packet {
     /// then unusable).
     #[inline(always)]
     pub(crate) fn load(&mut self, rays: &[Ray], curved: bool) -> bool {
-        let Some(first) = rays.iter().find(|r| r.is_valid()) else {
+        let rays = &rays[..rays.len().min(LANES)];
+        let Some(last) = rays.last() else {
             return false;
         };
+        // Every lane first (missing ones repeat the last ray), then which
+        // are valid, by [`Ray::is_valid`]'s arithmetic on the lanes: one
+        // vector test for the packet, not a scalar one per ray.
+        for i in 0..LANES {
+            self.set_lane(i, rays.get(i).unwrap_or(last));
+        }
+        let zero = F8::splat(0.0);
+        let (o, d) = (self.o, self.d);
+        let zeros =
+            (o[0] * zero + o[1] * zero) + (o[2] * zero + d[0] * zero) + (d[1] * zero + d[2] * zero);
+        let valid = zeros.eq(zero)
+            & (d[0].ne(zero) | d[1].ne(zero) | d[2].ne(zero))
+            & self.t_min.le(self.t_max);
+        let bits = valid.bits() & (u16::MAX >> (16 - rays.len())) as u8;
+        if bits == 0 {
+            return false;
+        }
+        // Missing and invalid lanes (rare) take the first valid ray.
+        let first = &rays[bits.trailing_zeros() as usize];
+        for i in 0..LANES {
+            self.valid[i] = bits >> i & 1 != 0;
+            if !self.valid[i] {
+                self.set_lane(i, first);
+            }
+        }
         let p0 = PreparedRay::new(first);
         self.up = [p0.dir.x > 0.0, p0.dir.y > 0.0, p0.dir.z > 0.0];
         self.k = [p0.kx, p0.ky, p0.kz];
-        for i in 0..LANES {
-            let r = rays.get(i).filter(|r| r.is_valid());
-            self.valid[i] = r.is_some();
-            let r = r.unwrap_or(first);
-            for a in 0..3 {
-                self.o[a].0[i] = r.origin[a];
-                self.d[a].0[i] = r.dir[a];
-            }
-            self.t_min.0[i] = r.t_min;
-            self.t_max.0[i] = r.t_max;
-        }
         // Lane by lane what PreparedRay::new computes, checked alike.
         let one = F8::splat(1.0);
-        let zero = F8::splat(0.0);
         let mut alike = M8([u32::MAX; LANES]);
         for a in 0..3 {
             self.inv[a] = one / self.d[a];
