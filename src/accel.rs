@@ -78,10 +78,15 @@ pub trait Accel {
     ) -> Result<(), Error> {
         check_lengths(rays.len(), hits.len(), stack.len(), self.stack_len())?;
         self.check_rays(rays)?;
-        for (r, h) in rays.iter().zip(hits.iter_mut()) {
-            *h = self.intersect(r, method, stack, stats)?;
-        }
-        Ok(())
+        // Counted in a local the loop can keep in registers, added once
+        // (also when a ray stops the loop).
+        let mut counts = TraceStats::default();
+        let done = rays.iter().zip(hits.iter_mut()).try_for_each(|(r, h)| {
+            *h = self.intersect(r, method, stack, &mut counts)?;
+            Ok(())
+        });
+        stats.add(&counts);
+        done
     }
 
     /// Any-hit answers of `rays` into `out` (as long).
@@ -95,10 +100,14 @@ pub trait Accel {
     ) -> Result<(), Error> {
         check_lengths(rays.len(), out.len(), stack.len(), self.stack_len())?;
         self.check_rays(rays)?;
-        for (r, o) in rays.iter().zip(out.iter_mut()) {
-            *o = self.occluded(r, method, stack, stats)?;
-        }
-        Ok(())
+        // As in `intersect_many`.
+        let mut counts = TraceStats::default();
+        let done = rays.iter().zip(out.iter_mut()).try_for_each(|(r, o)| {
+            *o = self.occluded(r, method, stack, &mut counts)?;
+            Ok(())
+        });
+        stats.add(&counts);
+        done
     }
 }
 
@@ -181,9 +190,13 @@ impl Accel for KdTree<'_> {
         if cfg!(feature = "packets") && method == Traversal::Packets {
             self.intersect_packets(rays, hits, stack, stats);
         } else {
+            // Counted in a local the loop can keep in registers, added
+            // once.
+            let mut counts = TraceStats::default();
             for (r, h) in rays.iter().zip(hits.iter_mut()) {
-                *h = KdTree::intersect(self, r, method, stack, stats);
+                *h = KdTree::intersect(self, r, method, stack, &mut counts);
             }
+            stats.add(&counts);
         }
         Ok(())
     }
@@ -202,9 +215,12 @@ impl Accel for KdTree<'_> {
         if cfg!(feature = "packets") && method == Traversal::Packets {
             self.occluded_packets(rays, out, stack, stats);
         } else {
+            // As in `intersect_many`.
+            let mut counts = TraceStats::default();
             for (r, o) in rays.iter().zip(out.iter_mut()) {
-                *o = KdTree::occluded(self, r, method, stack, stats);
+                *o = KdTree::occluded(self, r, method, stack, &mut counts);
             }
+            stats.add(&counts);
         }
         Ok(())
     }
