@@ -94,8 +94,11 @@ impl Aabb {
         // and `min` pass over one).
         let n = Vec3A::select(parallel | n.cmpne(n), Vec3A::NEG_INFINITY, n);
         let f = Vec3A::select(parallel | f.cmpne(f), Vec3A::INFINITY, f);
-        let t0 = t_min.max(n.max_element());
-        let t1 = t_max.min(f.min_element());
+        // The lanes' extremes are never NaN, so one compare gives what
+        // `f32::max` / `min` give (a NaN bound yields to them).
+        let (far_entry, near_exit) = (n.max_element(), f.min_element());
+        let t0 = if t_min > far_entry { t_min } else { far_entry };
+        let t1 = if t_max < near_exit { t_max } else { near_exit };
         if t0 <= t1 {
             Some((t0, t1))
         } else {
