@@ -14,6 +14,7 @@ use super::node::{
 };
 use super::{min_requirements, ropes, KdParams, KdScratch, KdStorage, KdTree};
 use crate::geom::{Aabb, Scene};
+use crate::limits::KD_MAX_NODES;
 use crate::Error;
 
 /// One split event: a primitive's clipped box starts, ends or lies flat at
@@ -173,9 +174,6 @@ fn with_min(b: &Aabb, axis: usize, v: f32) -> Aabb {
 pub(super) fn first_pair(params: &KdParams) -> usize {
     1 + params.compact as usize
 }
-
-/// Most nodes a tree holds: child indices live in 28 bits.
-pub(super) const MAX_NODES: usize = crate::limits::KD_MAX_NODES;
 
 pub(super) struct Builder<'s, 'a> {
     scene: Scene<'a>,
@@ -403,7 +401,7 @@ impl<'s, 'a> Builder<'s, 'a> {
         events: &'s mut [KdEvent],
         flags: &'s mut [u8],
     ) -> Builder<'s, 'a> {
-        let mut node_cap = storage.nodes.len().min(MAX_NODES);
+        let mut node_cap = storage.nodes.len().min(KD_MAX_NODES);
         if params.ropes {
             // A rope record per leaf, a rope index entry per node.
             node_cap = node_cap
@@ -680,11 +678,9 @@ impl<'s, 'a> Builder<'s, 'a> {
         }
     }
 
-    /// Splits `task` when the termination rule and the room allow; returns
-    /// the (left, right) children with their events in place.
-    /// Splits `task`'s node if it pays: the child to build next and the
-    /// one to build after it (none when the other child is an elided empty
-    /// leaf).
+    /// Splits `task`'s node when the termination rule and the room allow:
+    /// the child to build next and the one to build after it (none when
+    /// the other child is an elided empty leaf), their events in place.
     pub(super) fn try_split(&mut self, task: &Task) -> Option<(Task, Option<Task>)> {
         let n = task.prims;
         if n <= self.params.leaf_size as usize || task.depth >= self.depth_limit {

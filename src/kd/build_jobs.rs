@@ -29,7 +29,7 @@
 //! let tree = b.finish()?;
 //! ```
 
-use super::build::{check_build, first_pair, one_pass, Builder, KdEvent, Made, Task, MAX_NODES};
+use super::build::{check_build, first_pair, one_pass, Builder, KdEvent, Made, Task};
 use super::node::SHARED_EMPTY;
 use super::node::{KdNode, KD_MAX_DEPTH};
 use super::{KdParams, KdScratch, KdStorage, KdTree};
@@ -304,7 +304,7 @@ fn place_events(events: &mut [KdEvent], specs: &mut [JobSpec]) {
 /// build's [`Builder::new`] counts them (with ropes, a rope record per leaf
 /// and a rope index entry per node).
 fn node_limit(storage: &KdStorage, params: &KdParams) -> usize {
-    let mut limit = storage.nodes.len().min(MAX_NODES);
+    let mut limit = storage.nodes.len().min(crate::limits::KD_MAX_NODES);
     if params.ropes {
         limit = limit
             .min((2 * storage.ropes.len()).saturating_sub(1))

@@ -245,8 +245,8 @@ pub const EVENTS_PER_REF: usize = 6;
 /// leaf too), and the six events per primitive of the root's sweep.
 pub fn min_requirements(prim_count: usize, params: &KdParams) -> KdRequirements {
     KdRequirements {
-        // A compact tree's node 1 is its shared empty leaf (`SHARED_EMPTY`).
-        nodes: 1 + params.compact as usize,
+        // The root, and a compact tree's shared empty leaf (`SHARED_EMPTY`).
+        nodes: build::first_pair(params),
         ropes: params.ropes as usize,
         rope_ids: params.ropes as usize,
         refs: prim_count,
