@@ -29,9 +29,10 @@ out=target/embedded
 mkdir -p "$out"
 
 # The scenes are built in: the committed headers must be what
-# `coray export` writes today.
-cargo run -q -p coray-cli -- export spd:mount:4 --prefix mount -o "$out/scene_mount.h" >/dev/null
-cargo run -q -p coray-cli -- export spd:rings:1 --prefix rings -o "$out/scene_rings.h" >/dev/null
+# `coray export` writes today (the CLI built with the test profile, whose
+# dependencies `cargo test` built already).
+cargo run -q --profile test -p coray-cli -- export spd:mount:4 --prefix mount -o "$out/scene_mount.h" >/dev/null
+cargo run -q --profile test -p coray-cli -- export spd:rings:1 --prefix rings -o "$out/scene_rings.h" >/dev/null
 for h in scene_mount.h scene_rings.h; do
     cmp -s "$out/$h" "embedded/$h" || { echo "embedded/$h differs from coray export: regenerate it"; exit 1; }
 done

@@ -24,6 +24,13 @@ for tool in cc c++ nm; do
     command -v "$tool" >/dev/null || { echo "missing $tool"; exit 1; }
 done
 
+# Disk: a test run builds several profiles and many C programs; CI
+# machines can be short of space. No incremental caches (a run builds
+# once) and line tables only as debug information (backtraces and
+# sanitizer reports keep file:line): about half the footprint.
+export CARGO_INCREMENTAL=0
+export CARGO_PROFILE_DEV_DEBUG=line-tables-only
+
 cargo fmt --all -- --check
 # Clippy also holds the code to the declared MSRV (rust-version in
 # Cargo.toml): incompatible_msrv is a warning, and warnings are errors.
