@@ -486,14 +486,15 @@ pub unsafe extern "C" fn coray_bvh_open(
 /// The header and hierarchy a handle describes, over `scene`.
 ///
 /// Safety: the handle's arena is readable and unchanged during `'a`.
+#[inline(always)]
 unsafe fn view_of<'a>(
     h: Sealed,
     scene: Scene<'a>,
-) -> Result<(BvhArenaHeader, Bvh<'a>), CorayStatus> {
+) -> Result<(&'a BvhArenaHeader, Bvh<'a>), CorayStatus> {
     // SAFETY: the handle's parts lie within its arena (Handle::set_part
     // at open), readable by the caller's contract.
     unsafe {
-        let header = h.part::<BvhArenaHeader>(0)[0];
+        let header: &'a BvhArenaHeader = &h.part::<BvhArenaHeader>(0)[0];
         let b = Bvh::from_parts(scene, h.part::<BvhNode>(1), h.part::<u32>(2), header.info)?;
         Ok((header, b))
     }
@@ -506,7 +507,7 @@ unsafe fn view_of<'a>(
 unsafe fn open<'a>(
     t: *const CorayBvh,
     regions: &mut Regions,
-) -> Result<(BvhArenaHeader, Bvh<'a>), CorayStatus> {
+) -> Result<(&'a BvhArenaHeader, Bvh<'a>), CorayStatus> {
     // SAFETY: forwarded contract.
     unsafe {
         let h = handle::read(t.cast(), KIND_BVH, regions)?;
@@ -950,6 +951,7 @@ pub unsafe extern "C" fn coray_bvh_tracer(
                 0,
                 |h, s| Ok(view_of(h, s)?.1),
                 |x| x.stack_len(),
+                |_| [0; tracer::HINT_WORDS],
                 stack,
                 stack_bytes,
             )
@@ -974,7 +976,7 @@ unsafe fn traced<O>(
             tracer,
             KIND_BVH,
             #[inline(always)]
-            |h, s| Ok(view_of(h, s)?.1),
+            |h, s, _| Ok(view_of(h, s)?.1),
             #[inline(always)]
             |x| x.stack_len(),
             ray,

@@ -496,22 +496,45 @@ unsafe fn tree_of<'a>(h: Sealed, scene: coray::Scene<'a>) -> Result<KdTree<'a>, 
 /// over the counts by the one-ray call, and the two answered otherwise;
 /// found by the C-ABI fuzzer, `fuzz/regressions/kd-tracer-damaged-count`).
 ///
+/// `trace_box` is the tree's `trace_bounds()`, which the tracer keeps.
+///
 /// Safety: as [`parts_of`].
 #[inline(always)]
-unsafe fn known_tree_of<'a>(h: Sealed, scene: coray::Scene<'a>) -> KdTree<'a> {
+unsafe fn known_tree_of<'a>(
+    h: Sealed,
+    scene: coray::Scene<'a>,
+    trace_box: coray::Aabb,
+) -> KdTree<'a> {
     // SAFETY: forwarded contract.
     let (info, nodes, ropes, rope_ids, refs) = unsafe { parts_of(h) };
     fn first<T>(s: &[T], n: u32) -> &[T] {
         &s[..(n as usize).min(s.len())]
     }
-    KdTree::from_checked_parts(
+    KdTree::from_checked_parts_with_trace_box(
         scene,
         info,
+        trace_box,
         first(nodes, info.node_count),
         first(ropes, info.rope_count()),
         first(rope_ids, info.rope_id_count()),
         first(refs, info.ref_count),
     )
+}
+
+/// A box as a tracer's hint words: its six `f32`s' bits, two a word.
+fn trace_box_words(b: &coray::Aabb) -> [u64; tracer::HINT_WORDS] {
+    let f = [b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z].map(f32::to_bits);
+    [0, 2, 4].map(|i| u64::from(f[i]) | u64::from(f[i + 1]) << 32)
+}
+
+/// The box [`trace_box_words`] wrote.
+#[inline(always)]
+fn box_of_words(w: [u64; tracer::HINT_WORDS]) -> coray::Aabb {
+    let f = |i: usize| f32::from_bits((w[i / 2] >> (32 * (i % 2))) as u32);
+    coray::Aabb {
+        min: coray::Vec3::new(f(0), f(1), f(2)),
+        max: coray::Vec3::new(f(3), f(4), f(5)),
+    }
 }
 
 /// The tree behind a caller's handle, its buffers noted in `regions`.
@@ -932,6 +955,7 @@ pub unsafe extern "C" fn coray_kdtree_tracer(
                 traversal as u64,
                 |h, s| tree_of(h, s),
                 |_| KD_STACK_LEN,
+                |t| trace_box_words(&t.info().trace_bounds()),
                 stack,
                 stack_bytes,
             )
@@ -956,7 +980,7 @@ unsafe fn traced<O>(
             tracer,
             KIND_KD,
             #[inline(always)]
-            |h, s| Ok(known_tree_of(h, s)),
+            |h, s, hint| Ok(known_tree_of(h, s, box_of_words(hint))),
             #[inline(always)]
             |_| KD_STACK_LEN,
             ray,

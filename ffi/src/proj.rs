@@ -576,14 +576,15 @@ pub unsafe extern "C" fn coray_proj_open(
 /// The header and hierarchy a handle describes, over `scene`.
 ///
 /// Safety: the handle's arena is readable and unchanged during `'a`.
+#[inline(always)]
 unsafe fn view_of<'a>(
     h: Sealed,
     scene: Scene<'a>,
-) -> Result<(ProjArenaHeader, ProjHierarchy<'a>), CorayStatus> {
+) -> Result<(&'a ProjArenaHeader, ProjHierarchy<'a>), CorayStatus> {
     // SAFETY: the handle's parts lie within its arena (Handle::set_part
     // at open), readable by the caller's contract.
     unsafe {
-        let header = h.part::<ProjArenaHeader>(0)[0];
+        let header: &'a ProjArenaHeader = &h.part::<ProjArenaHeader>(0)[0];
         if header.plane_kind > 1 || !header.plane.iter().all(|x| x.is_finite()) {
             return Err(CorayStatus::CorruptArena);
         }
@@ -600,7 +601,7 @@ unsafe fn view_of<'a>(
 unsafe fn open<'a>(
     t: *const CorayProj,
     regions: &mut Regions,
-) -> Result<(ProjArenaHeader, ProjHierarchy<'a>), CorayStatus> {
+) -> Result<(&'a ProjArenaHeader, ProjHierarchy<'a>), CorayStatus> {
     // SAFETY: forwarded contract.
     unsafe {
         let h = handle::read(t.cast(), KIND_PROJ, regions)?;
@@ -953,6 +954,7 @@ pub unsafe extern "C" fn coray_proj_tracer(
                 scheme_id as u64,
                 |h, s| Ok(view_of(h, s)?.1),
                 |p| p.stack_len(),
+                |_| [0; tracer::HINT_WORDS],
                 stack,
                 stack_bytes,
             )
@@ -984,7 +986,7 @@ unsafe fn traced<O>(
             tracer,
             KIND_PROJ,
             #[inline(always)]
-            |h, s| Ok(view_of(h, s)?.1),
+            |h, s, _| Ok(view_of(h, s)?.1),
             #[inline(always)]
             |p| p.stack_len(),
             ray,

@@ -35,9 +35,13 @@ pub struct CorayTracer {
 }
 
 /// Words of a tracer: the binding's (its check first) and, after them,
-/// the running statistics; 10 of its 32 words are free for later fields
+/// the running statistics; 7 of its 32 words are free for later fields
 /// (the size is the handles', 256 bytes, and part of the ABI).
-const BINDING_WORDS: usize = 11;
+const BINDING_WORDS: usize = 14;
+
+/// Words a family keeps in its tracers for its view of the structure,
+/// computed once by the make call (the kd-tree: its trace box, six `f32`).
+pub(crate) const HINT_WORDS: usize = 3;
 const TOTALS_AT: usize = BINDING_WORDS;
 const _: () = assert!(TOTALS_AT + size_of::<TraceStats>() / 8 <= 32);
 const _: () = assert!(size_of::<TraceStats>() == 11 * 8 && align_of::<TraceStats>() == 8);
@@ -57,11 +61,14 @@ struct Binding {
     /// The stack's address and bytes.
     stack: usize,
     stack_bytes: usize,
-    /// Where an answer may lie, `[lo, hi)`, from the last call that checked
-    /// one against every buffer (empty until a call does).
+    /// Where an answer may start, `[first, last]` (so that it lies in the
+    /// gap the last call that checked one against every buffer found;
+    /// empty, `first > last`, until a call does).
     out: (usize, usize),
-    /// Where a ray may lie, likewise.
+    /// Where a ray may start, likewise.
     ray: (usize, usize),
+    /// The family's words for its view ([`HINT_WORDS`]).
+    hint: [u64; HINT_WORDS],
 }
 
 impl Binding {
@@ -93,6 +100,9 @@ impl Binding {
             self.out.1 as u64,
             self.ray.0 as u64,
             self.ray.1 as u64,
+            self.hint[0],
+            self.hint[1],
+            self.hint[2],
         ]
     }
 
@@ -108,19 +118,32 @@ impl Binding {
             stack_bytes: w[6] as usize,
             out: (w[7] as usize, w[8] as usize),
             ray: (w[9] as usize, w[10] as usize),
+            hint: [w[11], w[12], w[13]],
         }
     }
 }
 
-/// Whether `[p, p + bytes)` lies in `[lo, hi)` (`lo` is at least 1, so
-/// never at NULL).
+/// Whether `p` is one of the starts `[first, last]` (`first` is at least 1,
+/// so never NULL): two compares a call, the subtraction of the object's
+/// size made once, by [`starts_in_gap`].
 #[inline(always)]
-fn lies_in(p: usize, bytes: usize, (lo, hi): (usize, usize)) -> bool {
-    p >= lo && hi >= bytes && p <= hi - bytes
+fn starts_in(p: usize, (first, last): (usize, usize)) -> bool {
+    p >= first && p <= last
+}
+
+/// The starts `[first, last]` of objects of `bytes` that lie in the widest
+/// gap around `[p, p + bytes)` meeting none of `spans` (which it must not
+/// meet).
+#[inline]
+fn starts_in_gap(p: usize, bytes: usize, spans: &[Span]) -> (usize, usize) {
+    let (lo, hi) = Span::gap_around(p, bytes, spans);
+    // `hi` is at least `p + bytes`: no wrap.
+    (lo, hi - bytes)
 }
 
 /// Makes the tracer at `tracer` for the structure behind `handle` (of
-/// `kind`), traced by `mode`, with the stack at `stack`.
+/// `kind`), traced by `mode`, with the stack at `stack`, keeping `hint`'s
+/// words for the view (see [`trace`]).
 ///
 /// In order: the handle (null, alignment, seal), `view`'s header checks of
 /// its arena over its scene, the stack (null, alignment, at least
@@ -140,16 +163,18 @@ pub(crate) unsafe fn make<'a, S, I: Plain>(
     mode: u64,
     view: impl FnOnce(Sealed<'a>, Scene<'a>) -> Result<S, CorayStatus>,
     stack_len: impl FnOnce(&S) -> usize,
+    hint: impl FnOnce(&S) -> [u64; HINT_WORDS],
     stack: *mut c_void,
     stack_bytes: usize,
 ) -> Result<(), CorayStatus> {
     // SAFETY: forwarded contract; every pointer is checked (null,
     // alignment, size) before it is read, and nothing is written before
     // the overlap check.
-    let (h, scene) = unsafe {
+    let (h, scene, hint) = unsafe {
         let h = handle::read_unnoted(handle, kind)?;
         let scene = h.scene();
         let s = view(h, scene)?;
+        let hint = hint(&s);
         let need = stack_len(&s).max(1);
         carve::check_arena(stack.cast::<u8>())?;
         if stack_bytes > isize::MAX as usize {
@@ -162,7 +187,7 @@ pub(crate) unsafe fn make<'a, S, I: Plain>(
             return Err(CorayStatus::ArenaTooSmall);
         }
         carve::check_array(tracer, 1)?;
-        (h, scene)
+        (h, scene, hint)
     };
     let [handle_words, arena] = h.spans();
     let [vertices, triangles, spheres, cones] = Span::of_scene(&scene);
@@ -182,8 +207,9 @@ pub(crate) unsafe fn make<'a, S, I: Plain>(
         handle_seal: h.seal(),
         stack: stack as usize,
         stack_bytes,
-        out: (1, 1),
-        ray: (1, 1),
+        out: (1, 0),
+        ray: (1, 0),
+        hint,
     };
     b.check = b.check_of(tracer as usize);
     let mut words = [0u64; 32];
@@ -220,7 +246,8 @@ unsafe fn binding(tracer: *const CorayTracer, kind: Option<u64>) -> Result<Bindi
 /// tracer, each other) nor `out` one it reads (handle, arena, scene
 /// arrays): places inside the ranges the last such check found are taken
 /// as they are, others are checked and the ranges found again. Then
-/// `view`'s view of the structure (checked when the tracer was made), its
+/// `view`'s view of the structure (checked when the tracer was made; given
+/// the hint words the make call kept), its
 /// stack need (at most the tracer's stack), and `answer`; a fault it meets
 /// gives `CORAY_STATUS_CORRUPT_ARENA` and nothing is written.
 ///
@@ -233,7 +260,7 @@ unsafe fn binding(tracer: *const CorayTracer, kind: Option<u64>) -> Result<Bindi
 pub(crate) unsafe fn trace<'a, S, I: Plain, O>(
     tracer: *mut CorayTracer,
     kind: u64,
-    view: impl FnOnce(Sealed<'a>, Scene<'a>) -> Result<S, CorayStatus>,
+    view: impl FnOnce(Sealed<'a>, Scene<'a>, [u64; HINT_WORDS]) -> Result<S, CorayStatus>,
     stack_len: impl FnOnce(&S) -> usize,
     ray: *const CorayRay,
     out: *mut O,
@@ -259,7 +286,7 @@ pub(crate) unsafe fn trace<'a, S, I: Plain, O>(
     let (rb, ob) = (size_of::<CorayRay>(), size_of::<O>());
     let apart = r + rb <= o || o + ob <= r;
     // (Null and alignment were checked just above.)
-    let placed = lies_in(o, ob, b.out) && lies_in(r, rb, b.ray);
+    let placed = starts_in(o, b.out) && starts_in(r, b.ray);
     // Whether the binding's ranges (and so its check word) change: known
     // here, not by comparing the words after (a memcmp call a trace).
     let moved = !(apart && placed);
@@ -287,13 +314,13 @@ pub(crate) unsafe fn trace<'a, S, I: Plain, O>(
         {
             return Err(CorayStatus::InvalidParameter);
         }
-        b.out = Span::gap_around(o, ob, &out_meets);
-        b.ray = Span::gap_around(r, rb, &[stack, own]);
+        b.out = starts_in_gap(o, ob, &out_meets);
+        b.ray = starts_in_gap(r, rb, &[stack, own]);
         b.check = b.check_of(tracer as usize);
     }
     // SAFETY: the arena's header and parts passed `view`'s checks when the
     // tracer was made and are unchanged (contract).
-    let s = view(h, scene)?;
+    let s = view(h, scene, b.hint)?;
     let need = stack_len(&s);
     if need > b.stack_bytes / size_of::<I>() {
         return Err(CorayStatus::ArenaTooSmall);

@@ -303,14 +303,15 @@ pub unsafe extern "C" fn coray_wide_open(
 /// The header and hierarchy a handle describes, over `scene`.
 ///
 /// Safety: the handle's arena is readable and unchanged during `'a`.
+#[inline(always)]
 unsafe fn view_of<'a>(
     h: Sealed,
     scene: Scene<'a>,
-) -> Result<(WideArenaHeader, WideBvh<'a>), CorayStatus> {
+) -> Result<(&'a WideArenaHeader, WideBvh<'a>), CorayStatus> {
     // SAFETY: the handle's parts lie within its arena (Handle::set_part
     // at open), readable by the caller's contract.
     unsafe {
-        let header = h.part::<WideArenaHeader>(0)[0];
+        let header: &'a WideArenaHeader = &h.part::<WideArenaHeader>(0)[0];
         let w = WideBvh::from_parts(
             scene,
             h.part::<WideNode>(1),
@@ -329,7 +330,7 @@ unsafe fn view_of<'a>(
 unsafe fn open<'a>(
     t: *const CorayWide,
     regions: &mut Regions,
-) -> Result<(WideArenaHeader, WideBvh<'a>), CorayStatus> {
+) -> Result<(&'a WideArenaHeader, WideBvh<'a>), CorayStatus> {
     // SAFETY: forwarded contract.
     unsafe {
         let h = handle::read(t.cast(), KIND_WIDE, regions)?;
@@ -631,6 +632,7 @@ pub unsafe extern "C" fn coray_wide_tracer(
                 0,
                 |h, s| Ok(view_of(h, s)?.1),
                 |x| x.stack_len(),
+                |_| [0; tracer::HINT_WORDS],
                 stack,
                 stack_bytes,
             )
@@ -655,7 +657,7 @@ unsafe fn traced<O>(
             tracer,
             KIND_WIDE,
             #[inline(always)]
-            |h, s| Ok(view_of(h, s)?.1),
+            |h, s, _| Ok(view_of(h, s)?.1),
             #[inline(always)]
             |x| x.stack_len(),
             ray,

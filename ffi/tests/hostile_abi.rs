@@ -1550,7 +1550,10 @@ fn a_tracer_refuses_what_it_cannot_trust() {
             hit,
             InvalidParameter,
         );
-        for w in 0..11 {
+        // Each of the binding's 14 words (check, kind, mode, handle and
+        // its seal, stack, the answer's and the ray's ranges, the kd view's
+        // trace box).
+        for w in 0..14 {
             let mut damaged = *tr;
             damaged.opaque[w] ^= 1 << 40;
             tr.write(damaged);
@@ -1593,7 +1596,9 @@ fn a_tracer_refuses_what_it_cannot_trust() {
             "the answer over the tracer",
             tr,
             ray,
-            at(TRACER + 96).cast(),
+            // Over its statistics: the sentinel this writes there must not
+            // damage the binding's words (the first 112 bytes).
+            at(TRACER + 128).cast(),
             InvalidParameter,
         );
         // (no sentinel written in the handle, arena or scene: they must

@@ -225,6 +225,7 @@ impl<'a> Bvh<'a> {
     /// node count). Run [`Bvh::validate`] on parts from untrusted storage:
     /// until it accepts them, traversal never panics or hangs on them, but
     /// may stop early with [`crate::TraceStats::faults`] counted.
+    #[inline]
     pub fn from_parts(
         scene: Scene<'a>,
         nodes: &'a [BvhNode],

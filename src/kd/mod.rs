@@ -354,10 +354,31 @@ impl<'a> KdTree<'a> {
         rope_ids: &'a [u32],
         refs: &'a [u32],
     ) -> KdTree<'a> {
+        let trace_box = info.trace_bounds();
+        KdTree::from_checked_parts_with_trace_box(
+            scene, info, trace_box, nodes, ropes, rope_ids, refs,
+        )
+    }
+
+    /// [`KdTree::from_checked_parts`] with `info.trace_bounds()` computed
+    /// once before and passed as `trace_box`, for a caller that views the
+    /// same tree once per ray (a C tracer keeps the box in its own words:
+    /// about 30 instructions a call). Another box only changes answers:
+    /// rays are clipped to it before they walk.
+    #[inline]
+    pub fn from_checked_parts_with_trace_box(
+        scene: Scene<'a>,
+        info: &KdInfo,
+        trace_box: Aabb,
+        nodes: &'a [KdNode],
+        ropes: &'a [KdRopes],
+        rope_ids: &'a [u32],
+        refs: &'a [u32],
+    ) -> KdTree<'a> {
         KdTree {
             scene,
             info: *info,
-            trace_box: info.trace_bounds(),
+            trace_box,
             nodes,
             ropes,
             rope_ids,

@@ -72,6 +72,7 @@ impl<'a> ProjHierarchy<'a> {
     /// Reassembles a projection hierarchy from parts read back from memory
     /// with O(1) checks: a rectangle per node slot and per primitive.
     /// [`ProjHierarchy::validate`] checks the rest on untrusted memory.
+    #[inline]
     pub fn from_parts(
         bvh: Bvh<'a>,
         rects: &'a [Rect],
