@@ -134,6 +134,62 @@ fn push_events(events: &mut [KdEvent], at: &mut usize, prim: usize, b: &Aabb, ax
     }
 }
 
+/// Regions shorter than this are left to `sort_unstable`: the radix
+/// sort's fixed cost (its counts, a pass per digit) pays from about here.
+const RADIX_MIN_EVENTS: usize = 1024;
+
+/// Sorts `events`, which hold each primitive's events in increasing
+/// primitive order (as the root's bounds pass makes them), by their keys,
+/// with `buf` (as long) as scratch: a stable LSD radix sort in three
+/// passes (11, 11 and 12 bits) on the key's position and kind only (bits
+/// 30 to 63), whose ties keep the input's primitive order, the key's low
+/// bits. The result is `sort_unstable`'s: no two events share a key. A
+/// pass whose digit is the same for every event (the sign and exponent
+/// bits of a scene within one octave) is skipped. Not inlined: its 16 KiB
+/// of counts are on the stack only while it runs (a microcontroller's
+/// stack is small).
+#[inline(never)]
+fn sort_in_prim_order(events: &mut [KdEvent], buf: &mut [KdEvent]) {
+    // Bits 30..41, 41..52, 52..64 (the last digit 12 bits).
+    const DIGITS: [(u32, usize); 3] = [(30, 2048), (41, 2048), (52, 4096)];
+    let n = events.len();
+    // Passes alternate between the two slices; `in_buf` says where the
+    // keys are.
+    let mut in_buf = false;
+    let mut start = [0u32; 4096];
+    for (shift, size) in DIGITS {
+        let digit = |e: &KdEvent| (e.key >> shift) as usize & (size - 1);
+        let (from, to): (&[KdEvent], &mut [KdEvent]) = if in_buf {
+            (&*buf, &mut *events)
+        } else {
+            (&*events, &mut *buf)
+        };
+        let start = &mut start[..size];
+        start.fill(0);
+        for e in from {
+            start[digit(e)] += 1;
+        }
+        if start.iter().any(|&k| k as usize == n) {
+            continue;
+        }
+        let mut sum = 0;
+        for s in start.iter_mut() {
+            let k = *s;
+            *s = sum;
+            sum += k;
+        }
+        for e in from {
+            let d = digit(e);
+            to[start[d] as usize] = *e;
+            start[d] += 1;
+        }
+        in_buf = !in_buf;
+    }
+    if in_buf {
+        events.copy_from_slice(buf);
+    }
+}
+
 fn area64(b: &Aabb) -> f64 {
     area_of_extent((b.max - b.min).as_dvec3().to_array())
 }
@@ -491,11 +547,22 @@ impl<'s, 'a> Builder<'s, 'a> {
             }
         }
         self.frontier_refs = valid;
+        // Each region sorted; the scratch beyond the three, when the
+        // requirements gave it (they do but for the smallest arenas), is
+        // the radix sort's buffer.
+        let (regions, spare) = self.events.split_at_mut(6 * n);
+        for (axis, &top) in at.iter().enumerate() {
+            let region = &mut regions[2 * n * axis..top];
+            if region.len() >= RADIX_MIN_EVENTS && spare.len() >= region.len() {
+                sort_in_prim_order(region, &mut spare[..region.len()]);
+            } else {
+                region.sort_unstable();
+            }
+        }
         let mut counts = [0; 3];
         let mut end = 0;
         for (axis, count) in counts.iter_mut().enumerate() {
             let region = 2 * n * axis..at[axis];
-            self.events[region.clone()].sort_unstable();
             self.events.copy_within(region.clone(), end);
             *count = region.len();
             end += *count;
@@ -1080,6 +1147,52 @@ mod tests {
             let end = merge_from_back(&mut events, N, N + olds, (0, news));
             assert_eq!(end, N + olds + news, "case {case}");
             assert_eq!(events[N..end], want[..olds + news], "case {case}");
+        }
+    }
+
+    /// The root's radix sort gives `sort_unstable`'s order on events made
+    /// in primitive order: positions of every sign and size, many ties (so
+    /// the primitive order decides), planars, and scenes in one octave
+    /// (whose constant digits are skipped).
+    #[test]
+    fn radix_sort_in_prim_order_is_the_key_order() {
+        let mut g = crate::rng::SplitMix64(11);
+        const N: usize = 3000;
+        for case in 0..60 {
+            let n = 1 + g.below(N as u64) as usize;
+            let pos = |g: &mut crate::rng::SplitMix64| -> f32 {
+                match case % 4 {
+                    // Few distinct positions: ties everywhere.
+                    0 => g.below(8) as f32 - 4.0,
+                    // One octave: the sign and exponent digits constant.
+                    1 => 1.0 + g.below(1 << 23) as f32 / (1 << 23) as f32,
+                    // Any finite float, and the infinities.
+                    2 => match g.below(50) {
+                        0 => f32::INFINITY,
+                        1 => f32::NEG_INFINITY,
+                        _ => f32::from_bits(g.below(u32::MAX as u64) as u32 & 0xFF7F_FFFF),
+                    },
+                    _ => (g.below(2000) as f32 - 1000.0) * 1e-3,
+                }
+            };
+            let mut events = [KdEvent::default(); 2 * N];
+            let mut at = 0;
+            for prim in 0..n {
+                let (a, b) = (pos(&mut g), pos(&mut g));
+                let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
+                let flat = g.below(5) == 0;
+                let hi = if flat { lo } else { hi };
+                let b = Aabb {
+                    min: crate::Vec3::splat(lo),
+                    max: crate::Vec3::splat(hi),
+                };
+                push_events(&mut events, &mut at, prim, &b, 0);
+            }
+            let mut want = events;
+            want[..at].sort_unstable();
+            let mut buf = [KdEvent::default(); 2 * N];
+            sort_in_prim_order(&mut events[..at], &mut buf[..at]);
+            assert_eq!(events[..at], want[..at], "case {case}");
         }
     }
 
