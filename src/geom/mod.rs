@@ -14,6 +14,7 @@ pub use aabb::Aabb;
 pub use camera::Camera;
 pub use cone::Cone;
 pub use glam::Vec3;
+pub(crate) use ray::inverse;
 pub use ray::{Hit, PreparedRay, Ray, INVALID_ID};
 pub use scene::{Scene, GEOM_CONES, GEOM_SPHERES, GEOM_TRIANGLES};
 pub use sphere::Sphere;

@@ -119,6 +119,13 @@ impl PreparedRay {
     /// scalar division gives; the axes come from tables, not `% 3`.
     #[inline]
     pub fn new(ray: &Ray) -> PreparedRay {
+        PreparedRay::with_inverse(ray, inverse(ray.dir))
+    }
+
+    /// [`PreparedRay::new`] with `inv_dir`, [`inverse`] of the ray's
+    /// direction, computed before (by a walk that clipped the ray first).
+    #[inline]
+    pub(crate) fn with_inverse(ray: &Ray, inv_dir: Vec3) -> PreparedRay {
         let d = ray.dir;
         let a = d.abs();
         // The largest component's axis, x before y before z on ties, without
@@ -133,12 +140,11 @@ impl PreparedRay {
         if dk[kz] < 0.0 {
             core::mem::swap(&mut kx, &mut ky);
         }
-        let inv = div4([1.0; 4], [dk[0], dk[1], dk[2], 1.0]);
         let s = div4([dk[kx], dk[ky], 1.0, 1.0], [dk[kz]; 4]);
         PreparedRay {
             origin: ray.origin,
             dir: d,
-            inv_dir: Vec3::new(inv[0], inv[1], inv[2]),
+            inv_dir,
             t_min: ray.t_min,
             t_max: ray.t_max,
             kx,
@@ -155,6 +161,15 @@ impl PreparedRay {
     pub fn at(&self, t: f32) -> Vec3 {
         self.origin + self.dir * t
     }
+}
+
+/// `1 / d` per component (infinite where the component is zero), as
+/// [`PreparedRay::new`] computes it: a walk that clips a ray to the
+/// scene's box before preparing it gets the same bits.
+#[inline(always)]
+pub(crate) fn inverse(d: Vec3) -> Vec3 {
+    let inv = div4([1.0; 4], [d.x, d.y, d.z, 1.0]);
+    Vec3::new(inv[0], inv[1], inv[2])
 }
 
 /// Lane-wise `a / b`: one vector division where the target has one.
