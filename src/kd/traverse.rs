@@ -229,12 +229,7 @@ impl<'a> KdTree<'a> {
             tests: 0,
         };
         let mut steps = Steps::default();
-        match method {
-            Traversal::Hierarchical | Traversal::Packets => {
-                self.walk_root(&mut v, stack, t0, t1, &mut steps)
-            }
-            Traversal::Ropes => self.walk_ropes_from(&mut v, stack, t0, t1, &mut steps),
-        };
+        self.walk_by(method, &mut v, stack, t0, t1, &mut steps);
         steps.flush(stats);
         stats.prim_tests += v.tests;
         v.best
@@ -268,12 +263,7 @@ impl<'a> KdTree<'a> {
             tests: 0,
         };
         let mut steps = Steps::default();
-        match method {
-            Traversal::Hierarchical | Traversal::Packets => {
-                self.walk_root(&mut v, stack, t0, t1, &mut steps)
-            }
-            Traversal::Ropes => self.walk_ropes_from(&mut v, stack, t0, t1, &mut steps),
-        };
+        self.walk_by(method, &mut v, stack, t0, t1, &mut steps);
         steps.flush(stats);
         stats.prim_tests += v.tests;
         v.hit
@@ -328,6 +318,25 @@ impl<'a> KdTree<'a> {
     fn segment_of(&self, ray: &Ray, inv: Vec3) -> Option<(f32, f32)> {
         self.trace_box
             .clip_ray(ray.origin, inv, ray.t_min, ray.t_max)
+    }
+
+    /// The walk `method` names for the ray prepared in `v`, over its
+    /// segment `[t0, t1]` in the scene's box ([`Self::segment_of`]); true
+    /// when the visitor stopped it.
+    #[inline(always)]
+    fn walk_by<V: LeafVisitor>(
+        &self,
+        method: Traversal,
+        v: &mut V,
+        stack: &mut [KdStackItem],
+        t0: f32,
+        t1: f32,
+        steps: &mut Steps,
+    ) -> bool {
+        match method {
+            Traversal::Hierarchical | Traversal::Packets => self.walk_root(v, stack, t0, t1, steps),
+            Traversal::Ropes => self.walk_ropes_from(v, stack, t0, t1, steps),
+        }
     }
 
     /// [`Self::walk_from`] the root over `[t0, t1]`, the ray's segment in
