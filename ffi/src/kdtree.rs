@@ -82,11 +82,20 @@ pub struct CorayKdParams {
     /// threads wait less on the top and many find jobs enough. The tree is
     /// the same bytes whatever it says. Since 1.4.
     pub job_threads: u32,
+    /// What a reference costs a split, in ray-primitive tests per ray
+    /// through the scene's box (0 or more, finite): a split that adds `k`
+    /// references (its straddling primitives, referenced on both sides)
+    /// must save `k` times this many tests, scaled from the scene's box to
+    /// the node's by their areas. 0: the plain SAH (`_PAPER`, and a struct
+    /// from a header before 1.6); `CORAY_KD_PRESET_AUTO`: 1e-4, which keeps
+    /// long thin triangles from being cut without end (SPD gears: 3.9
+    /// references per primitive instead of 26). Since 1.6.
+    pub cost_reference: f32,
 }
 
 // On 64-bit targets the 1.2 field took the 1.0 struct's tail padding (40
-// bytes either way), and 1.4's grew it to 48; on 32-bit ones the struct
-// grew from 32 to 36 bytes, then to 40.
+// bytes either way), 1.4's grew it to 48 and 1.6's took its padding; on
+// 32-bit ones the struct grew from 32 to 36 bytes, then to 40 and 44.
 const _: () = assert!(size_of::<CorayKdParams>() == 48 || size_of::<usize>() != 8);
 
 /// What a built kd-tree holds, from `coray_kdtree_info` (O(1)).
@@ -153,6 +162,7 @@ pub extern "C" fn coray_kdtree_params_default(preset: CorayKdPreset) -> CorayKdP
         empty_bonus: p.empty_bonus,
         omit_ropes: if p.compact { 2 } else { !p.ropes as u32 },
         job_threads: 0,
+        cost_reference: p.cost_reference,
     }
 }
 
@@ -177,6 +187,7 @@ impl CorayKdParams {
             cost_traversal: self.cost_traversal,
             cost_intersection: self.cost_intersection,
             empty_bonus: self.empty_bonus,
+            cost_reference: self.cost_reference,
             refs_per_prim: self.refs_per_prim,
             ropes: self.omit_ropes == 0,
             compact: self.omit_ropes == 2,

@@ -50,7 +50,7 @@ pub use wide::*;
 /// Major version of the C ABI: changes only with an incompatible change.
 pub const CORAY_VERSION_MAJOR: u32 = 1;
 /// Minor version: new functions or struct fields, compatible.
-pub const CORAY_VERSION_MINOR: u32 = 5;
+pub const CORAY_VERSION_MINOR: u32 = 6;
 /// Patch version: fixes only.
 pub const CORAY_VERSION_PATCH: u32 = 0;
 
@@ -177,6 +177,6 @@ mod tests {
             super::CORAY_VERSION_PATCH
         );
         assert_eq!(v, want);
-        assert_eq!(super::coray_version(), 1 << 16 | 5 << 8);
+        assert_eq!(super::coray_version(), 1 << 16 | 6 << 8);
     }
 }

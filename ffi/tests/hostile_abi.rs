@@ -1785,3 +1785,33 @@ fn a_deepened_rtree_needs_a_new_tracer() {
         drop(stack);
     }
 }
+
+/// A reference cost that is negative, NaN or infinite is refused; 0 (the
+/// plain SAH, and what a struct from a header before 1.6 reads as) and the
+/// presets' are taken.
+#[test]
+fn kd_cost_reference_out_of_range_is_refused() {
+    let auto = coray_kdtree_params_default(CORAY_KD_PRESET_AUTO);
+    assert_eq!(auto.cost_reference, 1e-4);
+    assert_eq!(
+        coray_kdtree_params_default(CORAY_KD_PRESET_PAPER).cost_reference,
+        0.0
+    );
+    for (cost, want) in [
+        (-1e-4, CorayStatus::InvalidParameter),
+        (f32::NAN, CorayStatus::InvalidParameter),
+        (f32::INFINITY, CorayStatus::InvalidParameter),
+        (0.0, CorayStatus::Ok),
+        (1e-4, CorayStatus::Ok),
+        (f32::MAX, CorayStatus::Ok),
+    ] {
+        let p = CorayKdParams {
+            cost_reference: cost,
+            ..auto
+        };
+        let mut r = requirements();
+        // SAFETY: valid params and requirements structs on the stack.
+        let got = unsafe { coray_kdtree_requirements(100, &p, &mut r) };
+        assert_eq!(got, want, "cost_reference {cost}");
+    }
+}

@@ -107,6 +107,9 @@ struct SweepNode {
     extent: [f64; 3],
     inv_area: f64,
     prims: usize,
+    /// What one reference more costs a split of this node, in the node's
+    /// SAH terms (0 for the plain SAH).
+    ref_cost: f32,
 }
 
 /// The best plane of a node's sweep.
@@ -268,6 +271,10 @@ pub(super) struct Builder<'s, 'a> {
     /// How the reference room is shared: greedily (any split that fits the
     /// whole slice) or fairly (each subtree within its [`Task::ref_budget`]).
     fair: bool,
+    /// [`KdParams::cost_reference`] times the cost of a test, in the root's
+    /// SAH terms (times the root's area); a node's share is this over its
+    /// area. Set with the root: [`Self::root_task`], [`Self::as_job`].
+    ref_cost_root: f64,
 }
 
 /// Checks what every build checks first: the scene, the parameters, and
@@ -488,6 +495,7 @@ impl<'s, 'a> Builder<'s, 'a> {
             frontier_refs: 0,
             refs_short: 0,
             fair: false,
+            ref_cost_root: 0.0,
         }
     }
 
@@ -502,9 +510,22 @@ impl<'s, 'a> Builder<'s, 'a> {
     }
 
     /// Makes this builder one job of a job build: it starts with `prims`
-    /// references pending, as [`Self::root_task`] starts the whole scene.
-    pub(super) fn as_job(&mut self, prims: usize) {
+    /// references pending, as [`Self::root_task`] starts the whole scene,
+    /// and prices references against the scene's box `root_voxel`.
+    pub(super) fn as_job(&mut self, prims: usize, root_voxel: &Aabb) {
         self.frontier_refs = prims;
+        self.set_root(root_voxel);
+    }
+
+    fn set_root(&mut self, root_voxel: &Aabb) {
+        let p = &self.params;
+        // Zero for the plain SAH even where the root's area overflows
+        // (0 * infinity would be NaN).
+        self.ref_cost_root = if p.cost_reference > 0.0 {
+            p.cost_reference as f64 * p.cost_intersection as f64 * area64(root_voxel)
+        } else {
+            0.0
+        };
     }
 
     /// The storage, the events and the flags the builder was given back.
@@ -547,6 +568,7 @@ impl<'s, 'a> Builder<'s, 'a> {
             }
         }
         self.frontier_refs = valid;
+        self.set_root(&voxel);
         // Each region sorted; the scratch beyond the three, when the
         // requirements gave it (they do but for the smallest arenas), is
         // the radix sort's buffer.
@@ -635,6 +657,9 @@ impl<'s, 'a> Builder<'s, 'a> {
             extent: (v.max - v.min).as_dvec3().to_array(),
             inv_area: 1.0 / area,
             prims: task.prims,
+            // At most f32::MAX, so that a split adding no reference costs
+            // its SAH exactly (0 * infinity would be NaN).
+            ref_cost: (self.ref_cost_root / area).min(f32::MAX as f64) as f32,
         };
         let mut best: Option<Split> = None;
         self.sweep::<0>(&node, task.axis_range(0), &mut best);
@@ -666,8 +691,14 @@ impl<'s, 'a> Builder<'s, 'a> {
         // Counts convert through i32 (they are below 2^30): one
         // instruction, where an unsigned 64-bit one takes a branch and
         // several; the same value, so the same rounding.
+        let (ref_cost, n) = (node.ref_cost, node.prims as i32);
+        // A straddling primitive is counted on both sides: `nl + nr - n`
+        // references more. With no reference cost the sum is the plain
+        // SAH's bit for bit (`x + 0.0 == x`).
         let cost = |pl: f32, pr: f32, nl: usize, nr: usize| {
-            let c = kt + ki * (pl * nl as i32 as f32 + pr * nr as i32 as f32);
+            let (nl, nr) = (nl as i32, nr as i32);
+            let added = (nl + nr - n).max(0) as f32;
+            let c = kt + ki * (pl * nl as f32 + pr * nr as f32) + ref_cost * added;
             if nl == 0 || nr == 0 {
                 c * bonus
             } else {

@@ -373,6 +373,7 @@ impl<'s, 'a> KdBuild<'s, 'a> {
         split_jobs(
             self.scene,
             &self.params,
+            self.root_voxel,
             &self.specs[..count],
             &mut self.done[..count],
             &mut self.storage,
@@ -422,6 +423,7 @@ impl<'s, 'a> KdBuild<'s, 'a> {
         let jobs = split_jobs(
             scene,
             &params,
+            root_voxel,
             specs,
             done,
             &mut storage,
@@ -452,6 +454,7 @@ impl<'s, 'a> KdBuild<'s, 'a> {
                 done,
                 reruns,
                 prim_flags: &mut *prim_flags,
+                root_voxel,
             };
             layout.assemble(top_nodes, root_voxel, root_prims)
         });
@@ -556,6 +559,8 @@ struct Layout<'l, 'a, 'e> {
     done: &'l mut [JobDone],
     reruns: Reruns<'e>,
     prim_flags: &'l mut [u8],
+    /// The scene's box, which prices references (as the jobs did).
+    root_voxel: Aabb,
 }
 
 /// Where the finished tree stands: the next node pair and reference, and
@@ -698,7 +703,7 @@ impl Layout<'_, '_, '_> {
             work,
             &mut *self.prim_flags,
         );
-        b.as_job(s.task.prims);
+        b.as_job(s.task.prims, &self.root_voxel);
         b.run(s.task);
         if b.truncated {
             return None;
@@ -722,6 +727,7 @@ impl Layout<'_, '_, '_> {
 pub struct KdJob<'j> {
     scene: Scene<'j>,
     params: KdParams,
+    root_voxel: Aabb,
     task: Task,
     nodes: &'j mut [KdNode],
     refs: &'j mut [u32],
@@ -763,7 +769,7 @@ impl KdJob<'_> {
         };
         let params = job_params(&self.params);
         let mut b = Builder::new(self.scene, &params, storage, self.events, prim_flags);
-        b.as_job(task.prims);
+        b.as_job(task.prims, &self.root_voxel);
         b.run(task);
         *self.done = JobDone {
             ran: true,
@@ -783,6 +789,7 @@ impl KdJob<'_> {
 pub struct KdJobs<'j> {
     scene: Scene<'j>,
     params: KdParams,
+    root_voxel: Aabb,
     specs: &'j [JobSpec],
     done: core::slice::IterMut<'j, JobDone>,
     nodes: &'j mut [KdNode],
@@ -790,9 +797,11 @@ pub struct KdJobs<'j> {
     events: &'j mut [KdEvent],
 }
 
+#[allow(clippy::too_many_arguments)]
 fn split_jobs<'j>(
     scene: Scene<'j>,
     params: &KdParams,
+    root_voxel: Aabb,
     specs: &'j [JobSpec],
     done: &'j mut [JobDone],
     storage: &'j mut KdStorage,
@@ -802,6 +811,7 @@ fn split_jobs<'j>(
     KdJobs {
         scene,
         params: *params,
+        root_voxel,
         specs,
         done: done.iter_mut(),
         nodes: &mut storage.nodes[top_nodes..],
@@ -834,6 +844,7 @@ impl<'j> Iterator for KdJobs<'j> {
         Some(KdJob {
             scene: self.scene,
             params: self.params,
+            root_voxel: self.root_voxel,
             task: s.task,
             nodes: take_front(&mut self.nodes, s.nodes.len),
             refs: take_front(&mut self.refs, s.refs.len),
