@@ -6,7 +6,8 @@
 # it on QEMU's mps2-an386 (Cortex-M4, semihosting), runs the same program
 # built for the host against the host's bare library, and requires the same
 # check lines from both. Prints flash, RAM and stack figures; fails when
-# the kd-tree + LCTS firmware's flash passes 128 KiB.
+# the kd-tree + LCTS firmware's flash passes 128 KiB or a kd phase's stack
+# 32 KiB.
 #
 # Installs what is missing with apt-get (as root). Called by scripts/test.sh.
 set -euo pipefail
@@ -77,6 +78,13 @@ if ! diff "$out/host.checks" "$out/board.checks"; then
 fi
 grep -q '^embedded: ok' "$out/board.txt" || { echo "embedded: the board program failed"; exit 1; }
 echo "embedded: $(wc -l < "$out/board.checks") check lines identical on the Cortex-M4 and the host (board run $ms ms)"
+# The README tells a kd-tree + LCTS program to give coray 32 KiB of stack:
+# every kd phase's painted high-water mark must stay under it.
+kd_stack=$(awk '/^board stack kd / && $NF + 0 > m { m = $NF + 0 } END { print m + 0 }' "$out/board.txt")
+echo "stack (kd phases): $kd_stack bytes at most"
+if [ "$kd_stack" -gt $((32 * 1024)) ]; then
+    echo "embedded: a kd phase's stack passes the 32 KiB the README gives"; exit 1
+fi
 
 # Flash: .text holds code and read-only data (the linker script merges
 # them); the scenes' arrays are counted apart.
