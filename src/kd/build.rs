@@ -141,6 +141,10 @@ fn push_events(events: &mut [KdEvent], at: &mut usize, prim: usize, b: &Aabb, ax
 /// sort's fixed cost (its counts, a pass per digit) pays from about here.
 const RADIX_MIN_EVENTS: usize = 1024;
 
+/// Counters the root's radix sort needs: one per value of its widest
+/// digit.
+const RADIX_COUNTS: usize = 4096;
+
 /// Sorts `events`, which hold each primitive's events in increasing
 /// primitive order (as the root's bounds pass makes them), by their keys,
 /// with `buf` (as long) as scratch: a stable LSD radix sort in three
@@ -148,18 +152,17 @@ const RADIX_MIN_EVENTS: usize = 1024;
 /// 30 to 63), whose ties keep the input's primitive order, the key's low
 /// bits. The result is `sort_unstable`'s: no two events share a key. A
 /// pass whose digit is the same for every event (the sign and exponent
-/// bits of a scene within one octave) is skipped. Not inlined: its 16 KiB
-/// of counts are on the stack only while it runs (a microcontroller's
-/// stack is small).
-#[inline(never)]
-fn sort_in_prim_order(events: &mut [KdEvent], buf: &mut [KdEvent]) {
+/// bits of a scene within one octave) is skipped. Its counters are the
+/// keys of `counts` ([`RADIX_COUNTS`] of them, the build's scratch): on
+/// the stack they took 16 KiB, which put the kd build's stack past 32 KiB
+/// (a microcontroller's is small).
+fn sort_in_prim_order(events: &mut [KdEvent], buf: &mut [KdEvent], counts: &mut [KdEvent]) {
     // Bits 30..41, 41..52, 52..64 (the last digit 12 bits).
-    const DIGITS: [(u32, usize); 3] = [(30, 2048), (41, 2048), (52, 4096)];
-    let n = events.len();
+    const DIGITS: [(u32, usize); 3] = [(30, 2048), (41, 2048), (52, RADIX_COUNTS)];
+    let n = events.len() as u64;
     // Passes alternate between the two slices; `in_buf` says where the
     // keys are.
     let mut in_buf = false;
-    let mut start = [0u32; 4096];
     for (shift, size) in DIGITS {
         let digit = |e: &KdEvent| (e.key >> shift) as usize & (size - 1);
         let (from, to): (&[KdEvent], &mut [KdEvent]) = if in_buf {
@@ -167,24 +170,24 @@ fn sort_in_prim_order(events: &mut [KdEvent], buf: &mut [KdEvent]) {
         } else {
             (&*events, &mut *buf)
         };
-        let start = &mut start[..size];
-        start.fill(0);
+        let start = &mut counts[..size];
+        start.fill(KdEvent { key: 0 });
         for e in from {
-            start[digit(e)] += 1;
+            start[digit(e)].key += 1;
         }
-        if start.iter().any(|&k| k as usize == n) {
+        if start.iter().any(|k| k.key == n) {
             continue;
         }
         let mut sum = 0;
         for s in start.iter_mut() {
-            let k = *s;
-            *s = sum;
+            let k = s.key;
+            s.key = sum;
             sum += k;
         }
         for e in from {
             let d = digit(e);
-            to[start[d] as usize] = *e;
-            start[d] += 1;
+            to[start[d].key as usize] = *e;
+            start[d].key += 1;
         }
         in_buf = !in_buf;
     }
@@ -571,12 +574,13 @@ impl<'s, 'a> Builder<'s, 'a> {
         self.set_root(&voxel);
         // Each region sorted; the scratch beyond the three, when the
         // requirements gave it (they do but for the smallest arenas), is
-        // the radix sort's buffer.
+        // the radix sort's buffer and counters.
         let (regions, spare) = self.events.split_at_mut(6 * n);
         for (axis, &top) in at.iter().enumerate() {
             let region = &mut regions[2 * n * axis..top];
-            if region.len() >= RADIX_MIN_EVENTS && spare.len() >= region.len() {
-                sort_in_prim_order(region, &mut spare[..region.len()]);
+            if region.len() >= RADIX_MIN_EVENTS && spare.len() >= region.len() + RADIX_COUNTS {
+                let (buf, counts) = spare.split_at_mut(region.len());
+                sort_in_prim_order(region, buf, counts);
             } else {
                 region.sort_unstable();
             }
@@ -1222,7 +1226,8 @@ mod tests {
             let mut want = events;
             want[..at].sort_unstable();
             let mut buf = [KdEvent::default(); 2 * N];
-            sort_in_prim_order(&mut events[..at], &mut buf[..at]);
+            let mut counts = [KdEvent::default(); RADIX_COUNTS];
+            sort_in_prim_order(&mut events[..at], &mut buf[..at], &mut counts);
             assert_eq!(events[..at], want[..at], "case {case}");
         }
     }
