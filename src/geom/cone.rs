@@ -70,8 +70,7 @@ impl Cone {
         // discriminant does not cancel for a ray passing far from its origin
         // (the same move as Ray Tracing Gems ch. 7 for spheres).
         let inv_len = 1.0 / len;
-        let dir_len = crate::geom::lanes::sqrt_rn(r.dir.length_squared());
-        let d = r.dir / dir_len;
+        let (dir_len, d) = (r.dir_len, r.unit_dir);
         let center = b + axis * 0.5;
         let shift = (center - r.origin).dot(d);
         let q = (r.origin + d * shift - b) * inv_len;

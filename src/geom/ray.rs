@@ -109,6 +109,11 @@ pub struct PreparedRay {
     pub(crate) sx: f32,
     pub(crate) sy: f32,
     pub(crate) sz: f32,
+    /// `|dir|` (rounded once, [`crate::geom::lanes::sqrt_rn`]) and `dir /
+    /// |dir|`: the frame the sphere and cone tests work in, made once a ray
+    /// rather than once a test (the same values, so the same hits).
+    pub(crate) dir_len: f32,
+    pub(crate) unit_dir: Vec3,
 }
 
 impl PreparedRay {
@@ -141,6 +146,7 @@ impl PreparedRay {
             core::mem::swap(&mut kx, &mut ky);
         }
         let s = div4([dk[kx], dk[ky], 1.0, 1.0], [dk[kz]; 4]);
+        let dir_len = crate::geom::lanes::sqrt_rn(d.length_squared());
         PreparedRay {
             origin: ray.origin,
             dir: d,
@@ -153,6 +159,8 @@ impl PreparedRay {
             sx: s[0],
             sy: s[1],
             sz: s[2],
+            dir_len,
+            unit_dir: d / dir_len,
         }
     }
 

@@ -38,10 +38,9 @@ impl Sphere {
         // In units of the radius along a unit direction: the squares below
         // neither underflow nor overflow at any scale; `to_t` maps back.
         let inv_r = 1.0 / self.radius;
-        let dir_len = crate::geom::lanes::sqrt_rn(r.dir.length_squared());
+        let (dir_len, d) = (r.dir_len, r.unit_dir);
         let to_t = self.radius / dir_len;
         let oc = (r.origin - c) * inv_r;
-        let d = r.dir / dir_len;
         // Closest approach, then the discriminant from the perpendicular
         // distance: robust for far origins (Haines et al., Ray Tracing Gems 7).
         let uc = -oc.dot(d);

@@ -259,6 +259,10 @@ impl Packet {
             sx: self.sx.0[i],
             sy: self.sy.0[i],
             sz: self.sz.0[i],
+            // The packet's (made alike: `sqrt` and a division a lane) where
+            // the scene has spheres or cones; no test reads them elsewhere.
+            dir_len: self.dir_len.0[i],
+            unit_dir: Vec3::new(self.unit[0].0[i], self.unit[1].0[i], self.unit[2].0[i]),
         }
     }
 }
