@@ -62,9 +62,10 @@ pub struct KdParams {
     /// tests as its references cost. Without it (0, the plain SAH) perfect
     /// splits keep cutting long thin triangles: SPD gears' `auto` tree
     /// wants 26 references per primitive; with `auto`'s 1e-4, 3.9. `auto`'s
-    /// trees are 20-70% smaller and build 15-55% faster; packet traversal
-    /// gains 2-11%, one-ray hierarchical traversal loses up to 5%
-    /// (`docs/design.md`, the kd build). 0 or more, finite.
+    /// trees are up to 70% smaller and build up to 1.7x faster; packet
+    /// traversal gains up to 13%, one-ray hierarchical traversal loses up
+    /// to 10% on the same walk (`docs/design.md`, the kd build). 0 or
+    /// more, finite.
     pub cost_reference: f32,
     /// Ideal room for references, as a multiple of the primitive count
     /// (references are duplicated where primitives straddle splits).
