@@ -456,7 +456,7 @@ impl<'s, 'a> KdBuild<'s, 'a> {
                 prim_flags: &mut *prim_flags,
                 root_voxel,
             };
-            layout.assemble(top_nodes, root_voxel, root_prims)
+            layout.assemble(top_nodes, root_prims)
         });
         match made {
             Some(made) => {
@@ -559,7 +559,8 @@ struct Layout<'l, 'a, 'e> {
     done: &'l mut [JobDone],
     reruns: Reruns<'e>,
     prim_flags: &'l mut [u8],
-    /// The scene's box, which prices references (as the jobs did).
+    /// The scene's box: the tree's bounds, and what prices references (as
+    /// the jobs did).
     root_voxel: Aabb,
 }
 
@@ -577,9 +578,8 @@ impl Layout<'_, '_, '_> {
     /// build's layout: node pairs, leaves and references in depth-first
     /// preorder, left first. Everything moves down (a share starts at or
     /// after where its contents end up), so each copy runs forward in
-    /// place. None when a job fails again. `bounds` and `prims` are the
-    /// root's.
-    fn assemble(&mut self, top_nodes: usize, bounds: Aabb, prims: usize) -> Option<Made> {
+    /// place. None when a job fails again. `prims` are the root's.
+    fn assemble(&mut self, top_nodes: usize, prims: usize) -> Option<Made> {
         let mut top = [KdNode::default(); TOP_NODES];
         top[..top_nodes].copy_from_slice(&self.storage.nodes[..top_nodes]);
         // (top node, its slot in the finished tree)
@@ -629,7 +629,7 @@ impl Layout<'_, '_, '_> {
             ref_count: at.re,
             depth,
             truncated: false,
-            bounds,
+            bounds: self.root_voxel,
             prims,
         })
     }
