@@ -14,9 +14,10 @@
 use crate::render::{self, RayCounts, Rules, TraceCtx, Tracer};
 use crate::shoot::{AccelShooter, Shooter};
 use coray::kd::{KdTree, Traversal};
-use coray::lcts::image::{cast_image_with, image_requirements, Scheme};
+use coray::lcts::image::{image_requirements, Scheme};
 use coray::owned::OwnedCast;
 use coray::{Camera, TraceStats, Vec3};
+use coray_ffi::simd::cast_image_with;
 use coray_scenes::SceneMesh;
 
 /// Pixels per side of the procedure's image.

@@ -281,7 +281,7 @@ pub unsafe extern "C" fn coray_kdtree_cast_image(
             }
         };
         let w = c.width as usize;
-        let st = lcts::cast_image_with(&t, &c, s, sc, |x, y, h| {
+        let st = crate::simd::cast_image_with(&t, &c, s, sc, |x, y, h| {
             out[y as usize * w + x as usize] = (*h).into();
         })?;
         if st.trace.faults > 0 {

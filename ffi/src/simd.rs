@@ -6,7 +6,10 @@
 //! baseline.
 
 use coray::kd::{KdStackItem, KdTree};
-use coray::{Hit, Ray, TraceStats};
+use coray::lcts::guide::Paths;
+use coray::lcts::window::{self, Baseline, Kernel, Shaft};
+use coray::lcts::{CastStats, ImageScratch, Scheme};
+use coray::{Camera, Error, Hit, Ray, TraceStats};
 
 /// Whether this CPU runs the AVX2 kernels.
 #[inline]
@@ -62,6 +65,73 @@ pub fn occluded_packets(
     t.occluded_packets(rays, occluded, stack, stats);
 }
 
+/// The LCTS window trace's AVX2 clone (`coray::lcts::window::trace_avx2`)
+/// as a cast's kernel. Only [`Avx2Windows::detect`] makes one, on a CPU
+/// with AVX2.
+#[derive(Clone, Copy, Debug)]
+pub struct Avx2Windows(());
+
+impl Avx2Windows {
+    /// The kernel, when this CPU runs AVX2.
+    pub fn detect() -> Option<Avx2Windows> {
+        has_avx2().then_some(Avx2Windows(()))
+    }
+}
+
+impl Kernel for Avx2Windows {
+    #[inline(always)]
+    fn trace(
+        self,
+        tree: &KdTree,
+        shaft: Shaft,
+        paths: &Paths,
+        rays: &[Ray],
+        nearest: &[usize],
+        hits: &mut [Hit],
+        stack: &mut [KdStackItem],
+        stats: &mut TraceStats,
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: an `Avx2Windows` exists only where `detect` found AVX2
+        // (its field is private), the only feature the clone is compiled
+        // for; otherwise it is a safe function.
+        unsafe {
+            window::trace_avx2(tree, shaft, paths, rays, nearest, hits, stack, stats)
+        };
+        #[cfg(not(target_arch = "x86_64"))]
+        window::trace(tree, shaft, paths, rays, nearest, hits, stack, stats);
+    }
+}
+
+/// [`coray::lcts::cast_image_with`] with the widest window kernel this CPU
+/// runs (chosen once, before the cast).
+pub fn cast_image_with(
+    tree: &KdTree,
+    camera: &Camera,
+    scheme: Scheme,
+    scratch: ImageScratch,
+    put: impl FnMut(u32, u32, &Hit),
+) -> Result<CastStats, Error> {
+    match Avx2Windows::detect() {
+        Some(k) => coray::lcts::cast_image_with_by(k, tree, camera, scheme, scratch, put),
+        None => coray::lcts::cast_image_with_by(Baseline, tree, camera, scheme, scratch, put),
+    }
+}
+
+/// [`coray::lcts::cast_image`] with the widest window kernel this CPU runs.
+pub fn cast_image(
+    tree: &KdTree,
+    camera: &Camera,
+    scheme: Scheme,
+    scratch: ImageScratch,
+    hits: &mut [Hit],
+) -> Result<CastStats, Error> {
+    match Avx2Windows::detect() {
+        Some(k) => coray::lcts::cast_image_by(k, tree, camera, scheme, scratch, hits),
+        None => coray::lcts::cast_image_by(Baseline, tree, camera, scheme, scratch, hits),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     extern crate std;
@@ -69,10 +139,8 @@ mod tests {
     use coray::kd::{KdParams, Traversal, KD_STACK_LEN};
     use std::{vec, vec::Vec};
 
-    /// The AVX2 clone (where this CPU has it) gives the baseline's hits
-    /// and answers, bit for bit, on camera rays of a random scene.
-    #[test]
-    fn dispatched_kernels_agree_with_the_baseline() {
+    /// 400 random small triangles around the origin.
+    fn random_triangles() -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
         let mut g = coray::rng::SplitMix64(5);
         let mut v = Vec::new();
         let mut tris = Vec::new();
@@ -91,6 +159,14 @@ mod tests {
             }
             tris.push([3 * i, 3 * i + 1, 3 * i + 2]);
         }
+        (v, tris)
+    }
+
+    /// The AVX2 clone (where this CPU has it) gives the baseline's hits
+    /// and answers, bit for bit, on camera rays of a random scene.
+    #[test]
+    fn dispatched_kernels_agree_with_the_baseline() {
+        let (v, tris) = random_triangles();
         let scene = coray::Scene {
             vertices: &v,
             triangles: &tris,
@@ -126,5 +202,63 @@ mod tests {
             *h = t.intersect(r, Traversal::Hierarchical, &mut stack, &mut st);
         }
         assert_eq!(a, c);
+    }
+
+    /// Every LCTS cast by the AVX2 window kernel (where this CPU has it)
+    /// gives the baseline kernel's hits and counts, bit for bit, and the
+    /// hierarchical cast's hits.
+    #[test]
+    fn avx2_window_kernel_casts_as_the_baseline() {
+        use coray::lcts::{cast_image_by, image_requirements};
+        let Some(avx2) = Avx2Windows::detect() else {
+            return;
+        };
+        let (v, tris) = random_triangles();
+        let scene = coray::Scene {
+            vertices: &v,
+            triangles: &tris,
+            spheres: &[],
+            cones: &[],
+        };
+        let kd = coray::owned::OwnedKd::new(&scene, &KdParams::auto_with_ropes()).unwrap();
+        let t = kd.tree(scene).unwrap();
+        let cam = Camera {
+            from: coray::Vec3::new(0.5, 1.0, 4.0),
+            at: coray::Vec3::ZERO,
+            up: coray::Vec3::Y,
+            angle_deg: 50.0,
+            width: 96,
+            height: 80,
+        };
+        let n = (cam.width * cam.height) as usize;
+        let cast = |scheme: Scheme, by_avx2: bool| {
+            let mut room = coray::owned::OwnedCast::new(&image_requirements(
+                cam.width, cam.height, scheme, 256,
+            ));
+            let mut hits = vec![Hit::MISS; n];
+            let st = if by_avx2 {
+                cast_image_by(avx2, &t, &cam, scheme, room.scratch(), &mut hits)
+            } else {
+                cast_image_by(Baseline, &t, &cam, scheme, room.scratch(), &mut hits)
+            }
+            .unwrap();
+            (hits, st)
+        };
+        let (want, _) = cast(Scheme::Hierarchical, false);
+        let hit = want.iter().filter(|h| h.is_hit()).count();
+        assert!(hit > 500, "{hit} hits");
+        for scheme in [
+            Scheme::Slcts1d { n: 5 },
+            Scheme::Slcts2d { n: 5, m: 5 },
+            Scheme::Hlcts1d,
+            Scheme::Hlcts2d,
+        ] {
+            let (a, sa) = cast(scheme, false);
+            let (b, sb) = cast(scheme, true);
+            assert_eq!(a, b, "{scheme:?}");
+            assert_eq!(sa.trace, sb.trace, "{scheme:?}");
+            assert_eq!(a, want, "{scheme:?}");
+            assert!(sb.windows_shared > 0, "{scheme:?}");
+        }
     }
 }

@@ -230,7 +230,7 @@ pub fn holds(rp: &KdRopes, p: Vec3, d: Vec3) -> bool {
 /// among the paths' first leaves. The root box's faces are no split: a
 /// point just outside one (the traced box is a little wider) is located as
 /// if on it.
-fn guess_first(
+pub(crate) fn guess_first(
     tree: &KdTree,
     paths: &Paths,
     cur: &mut Cursor,

@@ -486,6 +486,26 @@ fn terminated(tree: &KdTree, h: &Hlcts, v: &mut Closest, steps: &mut Steps) -> b
     }
 }
 
+/// The first leaf of ray `r` of a cut without leading leaves, located
+/// from the cut's first entry (an interior node every ray of the shaft
+/// enters first) where `r` enters its box; `None` when it misses the box
+/// or lies in a split plane (the ray is then traced hierarchically).
+#[inline]
+pub(crate) fn locate_first(
+    tree: &KdTree,
+    h: &Hlcts,
+    r: &PreparedRay,
+    steps: &mut Steps,
+) -> Option<u32> {
+    let e = h.as_slice().first()?;
+    let bx = Aabb {
+        min: Vec3::from(e.min),
+        max: Vec3::from(e.max),
+    };
+    let (te, _) = bx.clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max)?;
+    tree.locate(e.node, r.at(te), steps)
+}
+
 /// Traces `ray` (inside the shaft of `h`) without a history: the
 /// termination object if any; else the leading leaves (the shaft's common
 /// leaf sequence, section 4.3.3), then ropes guided by `paths`
@@ -518,15 +538,8 @@ pub fn trace_guided(
             // No leading leaf: the first leaf from the cut's first entry, an
             // interior node every ray of the shaft enters first.
             0 => {
-                let from_entry = |r: &PreparedRay, _: Vec3, steps: &mut Steps| {
-                    let e = h.as_slice().first()?;
-                    let bx = Aabb {
-                        min: Vec3::from(e.min),
-                        max: Vec3::from(e.max),
-                    };
-                    let (te, _) = bx.clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max)?;
-                    tree.locate(e.node, r.at(te), steps)
-                };
+                let from_entry =
+                    |r: &PreparedRay, _: Vec3, steps: &mut Steps| locate_first(tree, h, r, steps);
                 guide::walk_from_first(
                     tree, &mut v, t0, t1, paths, &mut cur, &mut steps, from_entry,
                 )

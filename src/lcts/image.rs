@@ -22,7 +22,7 @@ use super::guide::Paths;
 use super::history::{trace_recorded_on, History, HistoryRecord};
 use super::hlcts::{self, Boundary, HlctsEntry, Source, MAX_RAYS};
 use super::slcts;
-use super::window::{self, Shaft};
+use super::window::{Baseline, Kernel, Shaft};
 use crate::geom::lanes::LANES;
 use crate::geom::{Camera, Hit};
 use crate::kd::{KdStackItem, KdTree, Traversal, KD_STACK_LEN};
@@ -229,6 +229,20 @@ pub fn cast_image(
     scratch: ImageScratch,
     hits: &mut [Hit],
 ) -> Result<CastStats, Error> {
+    cast_image_by(Baseline, tree, camera, scheme, scratch, hits)
+}
+
+/// [`cast_image`], its windows' rays traced by `kernel` (the same hits and
+/// counts by every kernel; `coray_ffi::simd` picks the widest this CPU
+/// runs).
+pub fn cast_image_by<K: Kernel>(
+    kernel: K,
+    tree: &KdTree,
+    camera: &Camera,
+    scheme: Scheme,
+    scratch: ImageScratch,
+    hits: &mut [Hit],
+) -> Result<CastStats, Error> {
     let pixels = camera.width as usize * camera.height as usize;
     if hits.len() < pixels {
         return Err(Error::SliceTooSmall {
@@ -238,7 +252,7 @@ pub fn cast_image(
         });
     }
     let w = camera.width as usize;
-    cast_image_with(tree, camera, scheme, scratch, |x, y, h| {
+    cast_image_with_by(kernel, tree, camera, scheme, scratch, |x, y, h| {
         hits[y as usize * w + x as usize] = *h;
     })
 }
@@ -246,6 +260,19 @@ pub fn cast_image(
 /// [`cast_image`], handing each pixel's hit to `put(x, y, hit)` (every
 /// pixel exactly once) instead of storing it.
 pub fn cast_image_with(
+    tree: &KdTree,
+    camera: &Camera,
+    scheme: Scheme,
+    scratch: ImageScratch,
+    put: impl FnMut(u32, u32, &Hit),
+) -> Result<CastStats, Error> {
+    cast_image_with_by(Baseline, tree, camera, scheme, scratch, put)
+}
+
+/// [`cast_image_with`], its windows' rays traced by `kernel`, as
+/// [`cast_image_by`].
+pub fn cast_image_with_by<K: Kernel>(
+    kernel: K,
     tree: &KdTree,
     camera: &Camera,
     scheme: Scheme,
@@ -291,7 +318,7 @@ pub fn cast_image_with(
             }
         }
         Scheme::Hlcts1d | Scheme::Hlcts2d => {
-            return cast_bisection(tree, camera, scheme, scratch, &mut put);
+            return cast_bisection(kernel, tree, camera, scheme, scratch, &mut put);
         }
         Scheme::Slcts1d { n } | Scheme::Slcts2d { n, .. } => {
             if n < 2 {
@@ -370,7 +397,7 @@ pub fn cast_image_with(
                         count_window(&mut st, &seq);
                         let paths = seq.paths(&hs, &mut *path_buf);
                         let (x0, x1) = (corners(w, n, i), corners(w, n, i + 1));
-                        let mut batch = Batch::new(tree, Shaft::Slcts(&seq), &paths);
+                        let mut batch = Batch::new(kernel, tree, Shaft::Slcts(&seq), &paths);
                         for x in x0 + 1..x1 {
                             let nearest = far_half(x, x0, x1);
                             batch.push(x, yj, ray(x, yj), nearest, stack, &mut st.trace, &mut put);
@@ -400,7 +427,7 @@ pub fn cast_image_with(
                         // row and column of windows own their leading edges.
                         let y_from = if j == 1 { y_prev } else { y_prev + 1 };
                         let x_from = if i == 0 { x0 } else { x0 + 1 };
-                        let mut batch = Batch::new(tree, Shaft::Slcts(&seq), &paths);
+                        let mut batch = Batch::new(kernel, tree, Shaft::Slcts(&seq), &paths);
                         for y in y_from..=yj {
                             let corner_row = y == y_prev || y == yj;
                             for x in x_from..=x1 {
@@ -445,8 +472,9 @@ fn count_window(st: &mut CastStats, seq: &slcts::Slcts) {
 const BATCH: usize = if cfg!(feature = "packets") { LANES } else { 1 };
 
 /// Pixels of one LCTS window waiting to be traced together
-/// ([`window::trace`]), up to [`BATCH`].
-struct Batch<'t, 's, 'p> {
+/// ([`super::window::trace`]), up to [`BATCH`].
+struct Batch<'t, 's, 'p, K> {
+    kernel: K,
     tree: &'t KdTree<'t>,
     shaft: Shaft<'s, 's>,
     paths: &'p Paths<'p>,
@@ -456,9 +484,10 @@ struct Batch<'t, 's, 'p> {
     len: usize,
 }
 
-impl<'t, 's, 'p> Batch<'t, 's, 'p> {
-    fn new(tree: &'t KdTree<'t>, shaft: Shaft<'s, 's>, paths: &'p Paths<'p>) -> Self {
+impl<'t, 's, 'p, K: Kernel> Batch<'t, 's, 'p, K> {
+    fn new(kernel: K, tree: &'t KdTree<'t>, shaft: Shaft<'s, 's>, paths: &'p Paths<'p>) -> Self {
         Batch {
+            kernel,
             tree,
             shaft,
             paths,
@@ -500,7 +529,7 @@ impl<'t, 's, 'p> Batch<'t, 's, 'p> {
     ) {
         let n = self.len;
         let mut hits = [Hit::MISS; BATCH];
-        window::trace(
+        self.kernel.trace(
             self.tree,
             self.shaft,
             self.paths,
@@ -567,7 +596,8 @@ struct Free<'b> {
     hlcts: &'b mut [HlctsEntry],
 }
 
-struct Bisection<'t, 'o, F: FnMut(u32, u32, &Hit)> {
+struct Bisection<'t, 'o, K, F: FnMut(u32, u32, &Hit)> {
+    kernel: K,
     tree: &'t KdTree<'t>,
     camera: &'t Camera,
     basis: (crate::Vec3, crate::Vec3, crate::Vec3),
@@ -584,7 +614,7 @@ struct Bisection<'t, 'o, F: FnMut(u32, u32, &Hit)> {
     stack: &'o mut [KdStackItem],
 }
 
-impl<F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, F> {
+impl<K: Kernel, F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, K, F> {
     fn ray(&self, x: u32, y: u32) -> crate::Ray {
         let (f, r, u) = self.basis;
         self.camera.ray_in(f, r, u, x as f32 + 0.5, y as f32 + 0.5)
@@ -677,7 +707,7 @@ impl<F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, F> {
                 let hs = [corners[0].records, corners[1].records];
                 let buf = core::mem::take(&mut self.paths);
                 let paths = cut.paths(&hs, &mut *buf);
-                let mut batch = Batch::new(self.tree, Shaft::Hlcts(&cut), &paths);
+                let mut batch = Batch::new(self.kernel, self.tree, Shaft::Hlcts(&cut), &paths);
                 for x in x0 + 1..x1 {
                     let nearest = far_half(x, x0, x1);
                     let ray = self.ray(x, y0);
@@ -718,7 +748,7 @@ impl<F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, F> {
             let hs: [Option<&[HistoryRecord]>; 4] = core::array::from_fn(|j| corners[j].records);
             let buf = core::mem::take(&mut self.paths);
             let paths = cut.paths(&hs, &mut *buf);
-            let mut batch = Batch::new(self.tree, Shaft::Hlcts(&cut), &paths);
+            let mut batch = Batch::new(self.kernel, self.tree, Shaft::Hlcts(&cut), &paths);
             for y in y0..=y1 {
                 for x in x0..=x1 {
                     if !corner(x, y) {
@@ -826,7 +856,8 @@ impl<F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, F> {
     }
 }
 
-fn cast_bisection(
+fn cast_bisection<K: Kernel>(
+    kernel: K,
     tree: &KdTree,
     camera: &Camera,
     scheme: Scheme,
@@ -861,6 +892,7 @@ fn cast_bisection(
         });
     }
     let mut b = Bisection {
+        kernel,
         tree,
         camera,
         basis: camera.basis(),

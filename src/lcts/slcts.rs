@@ -228,6 +228,18 @@ fn termination_object(
     (refs == [global]).then_some(global)
 }
 
+/// The first leaf of a ray of a shaft without common leaves, from the
+/// shaft's entry node, `p` where the ray enters the scene's box: one step
+/// for the test that `p` lies strictly inside the node; `None` when it does
+/// not (the ray is then traced hierarchically).
+#[inline]
+pub(crate) fn locate_first(tree: &KdTree, s: &Slcts, p: Vec3, steps: &mut Steps) -> Option<u32> {
+    let e = s.entry?;
+    steps.interior += 1;
+    e.holds(p).then_some(())?;
+    tree.locate(e.node, p, steps)
+}
+
 /// Traces `ray`, which lies inside the shaft of `s`, exactly as
 /// hierarchical traversal would answer: the termination object when there
 /// is one, else the sequence's leaves, then ropes from the last of them,
@@ -278,12 +290,8 @@ pub fn trace(
         // No common leaf: the first leaf from the shaft's entry node (one
         // step for the test that the entry point lies strictly inside it).
         Some((t0, t1)) if s.len == 0 => {
-            let from_entry = |_: &PreparedRay, p: Vec3, steps: &mut Steps| {
-                let e = s.entry?;
-                steps.interior += 1;
-                e.holds(p).then_some(())?;
-                tree.locate(e.node, p, steps)
-            };
+            let from_entry =
+                |_: &PreparedRay, p: Vec3, steps: &mut Steps| locate_first(tree, s, p, steps);
             guide::walk_from_first(
                 tree, &mut v, t0, t1, paths, &mut cur, &mut steps, from_entry,
             )

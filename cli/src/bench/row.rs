@@ -7,10 +7,11 @@ use super::rays::{self, Rays};
 use crate::built::{Built, Visit};
 use crate::method::Method;
 use crate::shoot::Shooter;
-use coray::lcts::{cast_image, image_requirements, Scheme};
+use coray::lcts::{image_requirements, Scheme};
 use coray::owned::OwnedCast;
 use coray::tolerance::{classify, same_hit, Agreement};
 use coray::{Camera, Hit, Ray, TraceStats};
+use coray_ffi::simd::cast_image;
 use serde::Serialize;
 
 /// What alpha and eta of an image cast are relative to: the hierarchical

@@ -12,9 +12,10 @@ use crate::method::{EmbreeCall, Method};
 use crate::scene::SceneData;
 use crate::shoot::Shooter;
 use coray::kd::{KdTree, Traversal};
-use coray::lcts::{cast_image, image_requirements, Scheme};
+use coray::lcts::{image_requirements, Scheme};
 use coray::owned::OwnedCast;
 use coray::{Hit, TraceStats};
+use coray_ffi::simd::cast_image;
 use serde::Serialize;
 
 /// Incoherent rays per scene.
