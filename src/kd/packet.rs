@@ -220,22 +220,21 @@ impl Packet {
     #[inline(always)]
     pub(crate) fn leaf_exit(&self, rp: &KdRopes) -> (F8, [u8; LANES], M8) {
         let mut exit = INF;
-        let mut face = [0u8; LANES];
+        let mut faces = [0u32; LANES];
         let mut ts = [INF; 3];
         for (a, ta) in ts.iter_mut().enumerate() {
             let bound = if self.up[a] { rp.max[a] } else { rp.min[a] };
             *ta = (F8::splat(bound) - self.o[a]) * self.inv[a];
             let nearer = ta.lt(exit);
             exit = nearer.select(*ta, exit);
-            let f = (2 * a + self.up[a] as usize) as u8;
-            for i in 0..LANES {
-                if nearer.get(i) {
-                    face[i] = f;
-                }
+            // Selects on the lanes' masks, not branches.
+            let f = (2 * a + self.up[a] as usize) as u32;
+            for (fi, m) in faces.iter_mut().zip(nearer.0) {
+                *fi = (f & m) | (*fi & !m);
             }
         }
         let [x, y, z] = ts.map(|t| t.le(exit));
-        (exit, face, (x & y) | (x & z) | (y & z))
+        (exit, faces.map(|f| f as u8), (x & y) | (x & z) | (y & z))
     }
 
     /// Lane `i` as the single ray's prepared form (for the cases a lane

@@ -228,21 +228,6 @@ fn trace_packet(
         *c = Cursor::new(paths, near);
     }
     let mut lanes = Lanes::new(rays, t1);
-    // One leaf for the lanes `on`: a step each, its primitives tested; the
-    // lanes with a hit clearly inside it are done. Returns where each lane
-    // leaves it; `None` for a leaf whose references lie outside the tree.
-    let test = |v: &mut ClosestLanes,
-                leaf: u32,
-                on: &mut M8,
-                steps: &mut Steps|
-     -> Option<(F8, [u8; LANES], M8)> {
-        steps.leaves += on.count() as u64;
-        let refs = tree.leaf_refs(tree.node(leaf))?;
-        let exits = p.leaf_exit(tree.rope(leaf));
-        let done = v.visit(tree, p, refs, *on, exits.0.min(t1));
-        *on = *on & !done;
-        Some(exits)
-    };
     // The common leaves, as walk_common visits them: a run of empty leaves
     // is one step and no test.
     let mut last = None;
@@ -255,7 +240,7 @@ fn trace_packet(
             steps.leaves += lanes;
             steps.empty += lanes;
         } else {
-            exits = Some(test(&mut v, node, &mut on, &mut steps)?);
+            exits = Some(test_leaf(tree, p, &mut v, node, t1, &mut on, &mut steps)?);
         }
     }
     match last {
@@ -291,7 +276,8 @@ fn trace_packet(
                 if tree.leaf_is_empty(leaf) {
                     steps.empty += on.count() as u64;
                 }
-                (t_exit, faces, at_edge) = test(&mut v, leaf, &mut on, &mut steps)?;
+                (t_exit, faces, at_edge) =
+                    test_leaf(tree, p, &mut v, leaf, t1, &mut on, &mut steps)?;
             }
             lanes.on = on;
             let exits = (t_exit, faces, at_edge);
@@ -316,6 +302,27 @@ fn trace_packet(
         }
     }
     Some(())
+}
+
+/// One leaf for the lanes `on`: a step each, its primitives tested; the
+/// lanes with a hit clearly inside it are done. Returns where each lane
+/// leaves it; `None` for a leaf whose references lie outside the tree.
+#[inline(always)]
+fn test_leaf(
+    tree: &KdTree,
+    p: &Packet,
+    v: &mut ClosestLanes,
+    leaf: u32,
+    t1: F8,
+    on: &mut M8,
+    steps: &mut Steps,
+) -> Option<(F8, [u8; LANES], M8)> {
+    steps.leaves += on.count() as u64;
+    let refs = tree.leaf_refs(tree.node(leaf))?;
+    let exits = p.leaf_exit(tree.rope(leaf));
+    let done = v.visit(tree, p, refs, *on, exits.0.min(t1));
+    *on = *on & !done;
+    Some(exits)
 }
 
 /// Lanes that walk apart, each along its single ray's leaves by guided
@@ -357,8 +364,9 @@ impl<'r> Lanes<'r> {
 
     /// Lane `i`'s single prepared ray.
     #[inline(always)]
-    fn prepared(&mut self, i: usize) -> PreparedRay {
-        *self.prepared[i].get_or_insert_with(|| PreparedRay::new(&self.rays[i]))
+    fn prepared(&mut self, i: usize) -> &PreparedRay {
+        let rays = self.rays;
+        self.prepared[i].get_or_insert_with(|| PreparedRay::new(&rays[i]))
     }
 
     /// Lane `i` goes on to `next` (its next leaf, entered at `t`), ends
@@ -394,12 +402,12 @@ impl<'r> Lanes<'r> {
                 continue;
             }
             let r = self.prepared(i);
-            let (next, t0) = match tree.scene_segment(&r) {
+            let (next, t0) = match tree.scene_segment(r) {
                 None => (Ok(None), 0.0),
                 Some((t0, _)) => {
                     let q = r.at(t0);
                     let first = guide::guess_first(tree, paths, cursor, q, r.dir, steps)
-                        .or_else(|| shaft.locate_first(tree, &r, q, steps));
+                        .or_else(|| shaft.locate_first(tree, r, q, steps));
                     (first.ok_or(()).map(Some), t0)
                 }
             };
@@ -443,7 +451,7 @@ impl<'r> Lanes<'r> {
                     Ok(Some(rope))
                 } else {
                     let r = self.prepared(i);
-                    guide::next(tree, &r, from, t, face, paths, &mut cursors[i], steps)
+                    guide::next(tree, r, from, t, face, paths, &mut cursors[i], steps)
                 }
             };
             self.go(i, next, t);
@@ -467,20 +475,26 @@ impl<'r> Lanes<'r> {
         let mut budget = LANES * tree.ropes.len();
         while self.on.any() {
             budget = budget.checked_sub(1)?;
-            let mut first = LANES;
-            for i in 0..LANES {
-                if self.on.get(i) && (first == LANES || self.t_in.0[i] < self.t_in.0[first]) {
-                    first = i;
-                }
+            // The first walking lane that enters its leaf first (branch
+            // free: the lanes' order is data).
+            let t_in = self.on.select(self.t_in, F8::splat(f32::INFINITY));
+            let nearest = t_in.0.iter().fold(f32::INFINITY, |a, &b| a.min(b));
+            let mut first = LANES - 1;
+            for i in (0..LANES).rev() {
+                first = if self.on.get(i) && t_in.0[i] == nearest {
+                    i
+                } else {
+                    first
+                };
+            }
+            if !self.on.get(first) {
+                // (No walking lane entered at `nearest`: a NaN.)
+                first = (0..LANES).find(|&i| self.on.get(i))?;
             }
             let node = self.at[first];
             let mut group = M8::NONE;
             for i in 0..LANES {
-                group.0[i] = if self.on.get(i) && self.at[i] == node {
-                    u32::MAX
-                } else {
-                    0
-                };
+                group.0[i] = self.on.0[i] & 0u32.wrapping_sub((self.at[i] == node) as u32);
             }
             let count = group.count() as u64;
             steps.leaves += count;
