@@ -1,13 +1,11 @@
 //! The rays of one LCTS window (an SLCTS window, or a small interval or
 //! rectangle of an HLCTS cast) traced together, eight at a time (the
-//! packet's lanes, `kd::packet`): each primitive of the shaft's
-//! common leaves is tested against all of them at once; past the common
-//! leaves the packet goes on by ropes while every ray still in it leaves
-//! its leaf through the same face into a leaf. Where the rays part (other
-//! faces, or a rope to an interior node), and in a shaft without common
-//! leaves, each lane walks on as [`slcts::trace`] and
-//! [`hlcts::trace_guided`] walk its single ray, and the lanes that stand
-//! in the same leaf test it together.
+//! packet's lanes, `kd::packet`): each primitive of the shaft's common
+//! leaves is tested against all of them at once. Past the common leaves
+//! (and in a shaft without common leaves, from each ray's first leaf)
+//! each lane walks on as [`slcts::trace`] and [`hlcts::trace_guided`]
+//! walk its single ray, and the lanes that stand in the same leaf test it
+//! together.
 //!
 //! Every ray gets the single-ray trace's hit, and so the hierarchical one: each
 //! lane tests the same primitives of the same leaves in the same order
@@ -201,11 +199,9 @@ pub fn trace_avx2(
 /// tree breaks an invariant, so that the single rays meet the fault and
 /// count it as they do.
 ///
-/// The lanes visit the common leaves together, then go on by ropes
-/// together while they all leave each leaf through the same face into a
-/// leaf. Past that, or without a common leaf, each lane walks its single
-/// ray's leaves ([`Lanes`]); the lanes that stand in one leaf test it
-/// together.
+/// The lanes visit the common leaves together; past them, or without a
+/// common leaf, each lane walks its single ray's leaves ([`Lanes`]), and
+/// the lanes that stand in one leaf test it together.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn trace_packet(
@@ -244,43 +240,9 @@ fn trace_packet(
         }
     }
     match last {
-        Some(mut leaf) => {
-            let (mut t_exit, mut faces, mut at_edge) =
-                exits.unwrap_or_else(|| p.leaf_exit(tree.rope(leaf)));
-            // By ropes, together while the lanes leave alike into a leaf.
-            for _ in 0..tree.ropes.len() {
-                // A lane whose segment ends in this leaf is done, hit or not.
-                on = on & !t_exit.gt(t1);
-                let Some(first) = (0..LANES).find(|&i| on.get(i)) else {
-                    break;
-                };
-                let face = faces[first];
-                if (0..LANES).any(|i| on.get(i) && faces[i] != face) || (on & at_edge).any() {
-                    break;
-                }
-                let rope = tree.rope(leaf).neighbor[face as usize];
-                if rope == NO_NODE {
-                    // Out of the scene: the lanes keep what they found.
-                    on = M8::NONE;
-                    break;
-                }
-                if !tree.node(rope).is_leaf() {
-                    break;
-                }
-                for (i, c) in cursors.iter_mut().enumerate() {
-                    if on.get(i) {
-                        c.follow(paths, rope);
-                    }
-                }
-                leaf = rope;
-                if tree.leaf_is_empty(leaf) {
-                    steps.empty += on.count() as u64;
-                }
-                (t_exit, faces, at_edge) =
-                    test_leaf(tree, p, &mut v, leaf, t1, &mut on, &mut steps)?;
-            }
+        Some(leaf) => {
+            let exits = exits.unwrap_or_else(|| p.leaf_exit(tree.rope(leaf)));
             lanes.on = on;
-            let exits = (t_exit, faces, at_edge);
             lanes.leave(tree, leaf, on, &exits, paths, &mut cursors, &mut steps);
         }
         None => {
