@@ -1,9 +1,12 @@
-//! Run-time choice of the packet kernels: the core compiles them twice,
-//! for the baseline of the target and with AVX2
-//! (`KdTree::intersect_packets_avx2`); here the CPU is asked once per call
-//! which one may run. The only `unsafe` is the call of the AVX2 clone,
-//! after the check. The bare build (no std) has no detection and runs the
-//! baseline.
+//! Run-time choice of the packet and LCTS window kernels: the core
+//! compiles them twice, for the baseline of the target and with AVX2
+//! (`KdTree::intersect_packets_avx2`, `lcts::window::trace_avx2`); here
+//! the CPU is asked which one may run. The only `unsafe` is the call of an
+//! AVX2 clone, after the check. The bare build (no std) has no detection
+//! and runs the baseline. `CORAY_NO_AVX2` in the environment (any value)
+//! keeps a process on the baseline: for tools that do not decode every
+//! AVX instruction (Debian 12's valgrind 3.19 stops at a `vmovq` between
+//! registers in the LCTS window kernel).
 
 use coray::kd::{KdStackItem, KdTree};
 use coray::lcts::guide::Paths;
@@ -11,17 +14,31 @@ use coray::lcts::window::{self, Baseline, Kernel, Shaft};
 use coray::lcts::{CastStats, ImageScratch, Scheme};
 use coray::{Camera, Error, Hit, Ray, TraceStats};
 
-/// Whether this CPU runs the AVX2 kernels.
+/// Whether this CPU runs the AVX2 kernels and the environment lets them
+/// (no `CORAY_NO_AVX2`); asked once per process.
 #[inline]
 pub fn has_avx2() -> bool {
     #[cfg(all(feature = "std", target_arch = "x86_64"))]
     {
-        std::is_x86_feature_detected!("avx2")
+        static CHOICE: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+        *CHOICE.get_or_init(|| {
+            avx2_allowed(
+                std::env::var_os("CORAY_NO_AVX2").is_some(),
+                std::is_x86_feature_detected!("avx2"),
+            )
+        })
     }
     #[cfg(not(all(feature = "std", target_arch = "x86_64")))]
     {
         false
     }
+}
+
+/// The AVX2 kernels run when the CPU has AVX2 and the caller did not opt
+/// out.
+#[cfg_attr(not(all(feature = "std", target_arch = "x86_64")), allow(dead_code))]
+fn avx2_allowed(opted_out: bool, cpu_has_avx2: bool) -> bool {
+    cpu_has_avx2 && !opted_out
 }
 
 /// [`KdTree::intersect_packets`] with the widest kernel this CPU runs.
@@ -160,6 +177,19 @@ mod tests {
             tris.push([3 * i, 3 * i + 1, 3 * i + 2]);
         }
         (v, tris)
+    }
+
+    #[test]
+    fn coray_no_avx2_keeps_the_baseline() {
+        assert!(avx2_allowed(false, true));
+        assert!(!avx2_allowed(true, true));
+        assert!(!avx2_allowed(false, false));
+        // This process's choice is its environment's and its CPU's.
+        #[cfg(target_arch = "x86_64")]
+        assert_eq!(
+            has_avx2(),
+            std::env::var_os("CORAY_NO_AVX2").is_none() && std::is_x86_feature_detected!("avx2")
+        );
     }
 
     /// The AVX2 clone (where this CPU has it) gives the baseline's hits
