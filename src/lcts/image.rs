@@ -24,7 +24,7 @@ use super::hlcts::{self, Boundary, HlctsEntry, Source, MAX_RAYS};
 use super::slcts;
 use super::window::{Baseline, Kernel, Shaft};
 use crate::geom::lanes::LANES;
-use crate::geom::{Camera, Hit};
+use crate::geom::{Aabb, Camera, Hit};
 use crate::kd::{KdStackItem, KdTree, Traversal, KD_STACK_LEN};
 use crate::{Error, TraceStats};
 use crate::{Ray, Vec3};
@@ -363,6 +363,7 @@ pub fn cast_image_with_by<K: Kernel>(
             let (seq_buf, path_buf) = scratch
                 .entries
                 .split_at_mut(scratch.entries.len() / (1 + CORNERS));
+            let screen = ScreenBox::new(camera, (f, r, u), &tree.trace_box);
             let mut hist_lens_top = HistRow { info: ct };
             let mut hist_lens_bottom = HistRow { info: cb };
             let corner_rows = if m == 1 {
@@ -395,8 +396,16 @@ pub fn cast_image_with_by<K: Kernel>(
                         let hits = [hist_lens_bottom.hit(i), hist_lens_bottom.hit(i + 1)];
                         let seq = slcts::build(tree, &hs, &hits, &mut *seq_buf);
                         count_window(&mut st, &seq);
-                        let paths = seq.paths(&hs, &mut *path_buf);
                         let (x0, x1) = (corners(w, n, i), corners(w, n, i + 1));
+                        let inner = [x0 + 1, x1.saturating_sub(1).max(x0 + 1)];
+                        if screen.as_ref().is_some_and(|b| b.misses(inner, [yj, yj])) {
+                            for x in x0 + 1..x1 {
+                                st.trace.rays += 1;
+                                put(x, yj, &Hit::MISS);
+                            }
+                            continue;
+                        }
+                        let paths = seq.paths(&hs, &mut *path_buf);
                         let mut batch = Batch::new(kernel, tree, Shaft::Slcts(&seq), &paths);
                         for x in x0 + 1..x1 {
                             let nearest = far_half(x, x0, x1);
@@ -421,12 +430,29 @@ pub fn cast_image_with_by<K: Kernel>(
                         ];
                         let seq = slcts::build(tree, &hs, &hits, &mut *seq_buf);
                         count_window(&mut st, &seq);
-                        let paths = seq.paths(&hs, &mut *path_buf);
                         let (x0, x1) = (corners(w, n, i), corners(w, n, i + 1));
                         // Each pixel belongs to exactly one window: the first
                         // row and column of windows own their leading edges.
                         let y_from = if j == 1 { y_prev } else { y_prev + 1 };
                         let x_from = if i == 0 { x0 } else { x0 + 1 };
+                        if screen
+                            .as_ref()
+                            .is_some_and(|b| b.misses([x_from, x1], [y_from, yj]))
+                        {
+                            // Every ray of the window misses the scene's box:
+                            // what its single trace finds by the clip alone.
+                            for y in y_from..=yj {
+                                let corner_row = y == y_prev || y == yj;
+                                for x in x_from..=x1 {
+                                    if !(corner_row && (x == x0 || x == x1)) {
+                                        st.trace.rays += 1;
+                                        put(x, y, &Hit::MISS);
+                                    }
+                                }
+                            }
+                            continue;
+                        }
+                        let paths = seq.paths(&hs, &mut *path_buf);
                         let mut batch = Batch::new(kernel, tree, Shaft::Slcts(&seq), &paths);
                         for y in y_from..=yj {
                             let corner_row = y == y_prev || y == yj;
@@ -465,6 +491,75 @@ fn count_window(st: &mut CastStats, seq: &slcts::Slcts) {
     st.windows_shared += (seq.leaves > 0) as u64;
     st.windows_terminated += seq.termination.is_some() as u64;
     st.windows_entered += (seq.leaves == 0 && seq.entry.is_some_and(|e| e.node != 0)) as u64;
+}
+
+/// How far (in the `sx`, `sy` of [`Camera::ray_in`], 2 across the image)
+/// a window must lie outside [`ScreenBox`] to be skipped: some 10^4 times
+/// the rounding of a pixel's direction and of the box's projection.
+const SCREEN_MARGIN: f32 = 1e-3;
+
+/// Where the scene's box lies on the image plane: the rectangle bounding
+/// its corners' projections, in the camera's `sx`, `sy`, made only when the
+/// whole box lies in front of the eye. A ray through the eye meets the box
+/// only where its direction projects into that rectangle (the box's
+/// projection is its corners' convex hull), so a window of pixels outside
+/// it by [`SCREEN_MARGIN`] misses the box with every ray: what each ray's
+/// own trace finds by its clip, with no step and no test.
+struct ScreenBox {
+    lo: [f32; 2],
+    hi: [f32; 2],
+    /// `2 / width`, `2 / height`: pixel to `sx`, `sy` as `ray_in` maps.
+    per_pixel: [f32; 2],
+}
+
+impl ScreenBox {
+    fn new(camera: &Camera, (f, r, u): (Vec3, Vec3, Vec3), bx: &Aabb) -> Option<ScreenBox> {
+        let eye = camera.from;
+        let (r2, u2) = (r.length_squared(), u.length_squared());
+        let corners = [0, 1, 2, 3, 4, 5, 6, 7].map(|k| {
+            Vec3::new(
+                if k & 1 == 0 { bx.min.x } else { bx.max.x },
+                if k & 2 == 0 { bx.min.y } else { bx.max.y },
+                if k & 4 == 0 { bx.min.z } else { bx.max.z },
+            ) - eye
+        });
+        let far = corners.iter().fold(0.0f32, |m, c| m.max(c.length()));
+        let (mut lo, mut hi) = ([f32::INFINITY; 2], [f32::NEG_INFINITY; 2]);
+        for q in corners {
+            let depth = q.dot(f);
+            // (A box reaching to or behind the eye's plane: no rectangle.)
+            if !(depth > 1e-3 * far) {
+                return None;
+            }
+            let s = [q.dot(r) / r2 / depth, q.dot(u) / u2 / depth];
+            for a in 0..2 {
+                lo[a] = lo[a].min(s[a]);
+                hi[a] = hi[a].max(s[a]);
+            }
+        }
+        let finite = lo.iter().chain(&hi).all(|v| v.is_finite());
+        (finite && f.is_finite() && eye.is_finite() && r2 > 0.0 && u2 > 0.0).then_some(ScreenBox {
+            lo,
+            hi,
+            per_pixel: [
+                2.0 / camera.width.max(1) as f32,
+                2.0 / camera.height.max(1) as f32,
+            ],
+        })
+    }
+
+    /// Whether every ray of the pixels `xs` (first, last) by `ys` misses
+    /// the box.
+    fn misses(&self, xs: [u32; 2], ys: [u32; 2]) -> bool {
+        let sx = |x: u32| (x as f32 + 0.5) * self.per_pixel[0] - 1.0;
+        let sy = |y: u32| 1.0 - (y as f32 + 0.5) * self.per_pixel[1];
+        // sx grows with x, sy falls with y.
+        let (left, right, top, bottom) = (sx(xs[0]), sx(xs[1]), sy(ys[0]), sy(ys[1]));
+        right < self.lo[0] - SCREEN_MARGIN
+            || left > self.hi[0] + SCREEN_MARGIN
+            || top < self.lo[1] - SCREEN_MARGIN
+            || bottom > self.hi[1] + SCREEN_MARGIN
+    }
 }
 
 /// Rays an LCTS batch holds: a packet's worth, or one without the
@@ -601,6 +696,9 @@ struct Bisection<'t, 'o, K, F: FnMut(u32, u32, &Hit)> {
     tree: &'t KdTree<'t>,
     camera: &'t Camera,
     basis: (crate::Vec3, crate::Vec3, crate::Vec3),
+    /// Where the scene's box lies on the image (rectangles outside it are
+    /// not traced, their rays missing it).
+    screen: Option<ScreenBox>,
     cap: usize,
     per_cut: usize,
     /// Rectangles of at most this many pixels are cast from their cut
@@ -673,6 +771,26 @@ impl<K: Kernel, F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, K, F> {
         free: Free,
     ) {
         let [x0, y0, x1, y1] = rect;
+        if self
+            .screen
+            .as_ref()
+            .is_some_and(|b| b.misses([x0, x1], [y0, y1]))
+        {
+            // Every ray of the rectangle misses the scene's box: its pixels
+            // but the corners (traced already) get what their own traces
+            // would, with no cut built for them.
+            let corner =
+                |x: u32, y: u32| (x == x0 || x == x1) && (y == y0 || y == y1 || corners.len() == 2);
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    if !corner(x, y) {
+                        self.st.trace.rays += 1;
+                        (self.put)(x, y, &Hit::MISS);
+                    }
+                }
+            }
+            return;
+        }
         let bounds: [Boundary; MAX_RAYS] = core::array::from_fn(|j| {
             let c = corners.get(j).copied().unwrap_or(corners[0]);
             Boundary {
@@ -896,6 +1014,7 @@ fn cast_bisection<K: Kernel>(
         tree,
         camera,
         basis: camera.basis(),
+        screen: ScreenBox::new(camera, camera.basis(), &tree.trace_box),
         cap,
         per_cut,
         leaf_pixels: LEAF_PIXELS,
@@ -968,4 +1087,92 @@ fn cast_bisection<K: Kernel>(
         }
     }
     Ok(b.st)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::inverse;
+    use crate::rng::SplitMix64;
+
+    /// A window [`ScreenBox`] skips holds no pixel whose ray meets the box
+    /// (the clip the traversal makes), on random cameras and boxes; and
+    /// the test skips windows (it is not vacuous).
+    #[test]
+    fn skipped_windows_hold_no_ray_into_the_box() {
+        let mut g = SplitMix64(11);
+        let mut v = |lo: f32, hi: f32| lo + (hi - lo) * g.next_f32();
+        let (mut skipped, mut kept) = (0, 0);
+        for _ in 0..200 {
+            let c = Vec3::new(v(-5.0, 5.0), v(-5.0, 5.0), v(-5.0, 5.0));
+            let e = Vec3::new(v(0.1, 3.0), v(0.1, 3.0), v(0.1, 3.0));
+            let bx = Aabb {
+                min: c - e,
+                max: c + e,
+            };
+            let camera = Camera {
+                from: Vec3::new(v(-12.0, 12.0), v(-12.0, 12.0), v(-12.0, 12.0)),
+                at: c + Vec3::new(v(-6.0, 6.0), v(-6.0, 6.0), v(-6.0, 6.0)),
+                up: Vec3::Y,
+                angle_deg: v(20.0, 100.0),
+                width: 48,
+                height: 40,
+            };
+            if camera.fault().is_some() {
+                continue;
+            }
+            let (f, r, u) = camera.basis();
+            let Some(screen) = ScreenBox::new(&camera, (f, r, u), &bx) else {
+                continue;
+            };
+            for y0 in (0..camera.height - 4).step_by(4) {
+                for x0 in (0..camera.width - 4).step_by(4) {
+                    let (x1, y1) = (x0 + 4, y0 + 4);
+                    if !screen.misses([x0, x1], [y0, y1]) {
+                        kept += 1;
+                        continue;
+                    }
+                    skipped += 1;
+                    for y in y0..=y1 {
+                        for x in x0..=x1 {
+                            let ray = camera.ray_in(f, r, u, x as f32 + 0.5, y as f32 + 0.5);
+                            let clip =
+                                bx.clip_ray(ray.origin, inverse(ray.dir), ray.t_min, ray.t_max);
+                            assert!(
+                                clip.is_none(),
+                                "pixel ({x}, {y}) of a skipped window meets the box"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+        assert!(
+            skipped > 1000 && kept > 1000,
+            "{skipped} skipped, {kept} kept"
+        );
+    }
+
+    /// No rectangle when the box reaches behind the eye.
+    #[test]
+    fn a_box_around_the_eye_has_no_screen_rectangle() {
+        let camera = Camera {
+            from: Vec3::ZERO,
+            at: Vec3::Z,
+            up: Vec3::Y,
+            angle_deg: 60.0,
+            width: 8,
+            height: 8,
+        };
+        let bx = Aabb {
+            min: Vec3::splat(-1.0),
+            max: Vec3::splat(1.0),
+        };
+        assert!(ScreenBox::new(&camera, camera.basis(), &bx).is_none());
+        let ahead = Aabb {
+            min: Vec3::new(-1.0, -1.0, 4.0),
+            max: Vec3::new(1.0, 1.0, 6.0),
+        };
+        assert!(ScreenBox::new(&camera, camera.basis(), &ahead).is_some());
+    }
 }
