@@ -156,6 +156,16 @@ mod tests {
     use coray::kd::{KdParams, Traversal, KD_STACK_LEN};
     use std::{vec, vec::Vec};
 
+    /// A scene of `triangles` over `vertices`.
+    fn scene_of<'a>(vertices: &'a [[f32; 3]], triangles: &'a [[u32; 3]]) -> coray::Scene<'a> {
+        coray::Scene {
+            vertices,
+            triangles,
+            spheres: &[],
+            cones: &[],
+        }
+    }
+
     /// 400 random small triangles around the origin.
     fn random_triangles() -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
         let mut g = coray::rng::SplitMix64(5);
@@ -197,12 +207,7 @@ mod tests {
     #[test]
     fn dispatched_kernels_agree_with_the_baseline() {
         let (v, tris) = random_triangles();
-        let scene = coray::Scene {
-            vertices: &v,
-            triangles: &tris,
-            spheres: &[],
-            cones: &[],
-        };
+        let scene = scene_of(&v, &tris);
         let kd = coray::owned::OwnedKd::new(&scene, &KdParams::auto()).unwrap();
         let t = kd.tree(scene).unwrap();
         let rays: Vec<Ray> = (0..64 * 64)
@@ -244,12 +249,7 @@ mod tests {
             return;
         };
         let (v, tris) = random_triangles();
-        let scene = coray::Scene {
-            vertices: &v,
-            triangles: &tris,
-            spheres: &[],
-            cones: &[],
-        };
+        let scene = scene_of(&v, &tris);
         let kd = coray::owned::OwnedKd::new(&scene, &KdParams::auto_with_ropes()).unwrap();
         let t = kd.tree(scene).unwrap();
         let cam = Camera {

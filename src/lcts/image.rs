@@ -399,10 +399,8 @@ pub fn cast_image_with_by<K: Kernel>(
                         let (x0, x1) = (corners(w, n, i), corners(w, n, i + 1));
                         let inner = [x0 + 1, x1.saturating_sub(1).max(x0 + 1)];
                         if screen.as_ref().is_some_and(|b| b.misses(inner, [yj, yj])) {
-                            for x in x0 + 1..x1 {
-                                st.trace.rays += 1;
-                                put(x, yj, &Hit::MISS);
-                            }
+                            // (`inner` reaches x1 when the window has no inner pixel.)
+                            put_misses(&mut st.trace, &mut put, inner, [yj, yj], |x, _| x == x1);
                             continue;
                         }
                         let paths = seq.paths(&hs, &mut *path_buf);
@@ -439,17 +437,8 @@ pub fn cast_image_with_by<K: Kernel>(
                             .as_ref()
                             .is_some_and(|b| b.misses([x_from, x1], [y_from, yj]))
                         {
-                            // Every ray of the window misses the scene's box:
-                            // what its single trace finds by the clip alone.
-                            for y in y_from..=yj {
-                                let corner_row = y == y_prev || y == yj;
-                                for x in x_from..=x1 {
-                                    if !(corner_row && (x == x0 || x == x1)) {
-                                        st.trace.rays += 1;
-                                        put(x, y, &Hit::MISS);
-                                    }
-                                }
-                            }
+                            let corner = |x, y| (y == y_prev || y == yj) && (x == x0 || x == x1);
+                            put_misses(&mut st.trace, &mut put, [x_from, x1], [y_from, yj], corner);
                             continue;
                         }
                         let paths = seq.paths(&hs, &mut *path_buf);
@@ -559,6 +548,26 @@ impl ScreenBox {
             || left > self.hi[0] + SCREEN_MARGIN
             || top < self.lo[1] - SCREEN_MARGIN
             || bottom > self.hi[1] + SCREEN_MARGIN
+    }
+}
+
+/// Hands `put` a miss for every pixel of `xs` by `ys` (first, last) but
+/// those `traced` already, and counts their rays: what the traces of rays
+/// that miss the scene's box give (no step, no test).
+fn put_misses(
+    stats: &mut TraceStats,
+    put: &mut impl FnMut(u32, u32, &Hit),
+    xs: [u32; 2],
+    ys: [u32; 2],
+    traced: impl Fn(u32, u32) -> bool,
+) {
+    for y in ys[0]..=ys[1] {
+        for x in xs[0]..=xs[1] {
+            if !traced(x, y) {
+                stats.rays += 1;
+                put(x, y, &Hit::MISS);
+            }
+        }
     }
 }
 
@@ -781,14 +790,7 @@ impl<K: Kernel, F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, K, F> {
             // would, with no cut built for them.
             let corner =
                 |x: u32, y: u32| (x == x0 || x == x1) && (y == y0 || y == y1 || corners.len() == 2);
-            for y in y0..=y1 {
-                for x in x0..=x1 {
-                    if !corner(x, y) {
-                        self.st.trace.rays += 1;
-                        (self.put)(x, y, &Hit::MISS);
-                    }
-                }
-            }
+            put_misses(&mut self.st.trace, self.put, [x0, x1], [y0, y1], corner);
             return;
         }
         let bounds: [Boundary; MAX_RAYS] = core::array::from_fn(|j| {
