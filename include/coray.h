@@ -372,10 +372,12 @@ typedef struct CorayKdParams {
   uint32_t omit_ropes;
   // Threads that `coray_kdtree_build_jobs`' runner will run the jobs on
   // (0: not known, the default). The build's top is split until each
-  // job holds about that fraction of the primitives (from a half for 1
-  // or 2 threads to a sixteenth; a quarter when not known), so that two
-  // threads wait less on the top and many find jobs enough. The tree is
-  // the same bytes whatever it says. Since 1.4.
+  // job holds about that fraction of the primitives (the whole tree for
+  // 1 thread, a half for 2, down to a sixteenth; a quarter when not
+  // known), so that two threads wait less on the top and many find jobs
+  // enough. Without a runner (`coray_kdtree_build`) the build is one
+  // job whatever it says. The tree is the same bytes whatever it says.
+  // Since 1.4.
   uint32_t job_threads;
   // What a reference costs a split, in ray-primitive tests per ray
   // through the scene's box (0 or more, finite): a split that adds `k`

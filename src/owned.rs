@@ -48,7 +48,7 @@ impl OwnedKd {
 
     /// Builds into this room; the scratch is freed afterwards.
     pub fn build(&mut self, scene: &Scene, params: &KdParams) -> Result<(), Error> {
-        self.build_with_jobs(scene, params, 0, |_| {})
+        self.build_with_jobs(scene, params, 1, |_| {})
     }
 
     /// Builds into this room as [`Self::build`] does, handing the build's

@@ -299,6 +299,41 @@ fn the_thread_count_sets_the_number_of_jobs_not_the_tree() {
     assert!(counts[0] < counts[1] && counts[1] < counts[2], "{counts:?}");
 }
 
+/// One thread gets one job, the whole tree in all the room: no share to
+/// outgrow; the depth-first build's tree.
+#[test]
+fn one_thread_gets_one_job() {
+    let mesh = spd_mesh("teapot", None);
+    let scene = mesh.scene();
+    let params = KdParams::auto();
+    let req = kd::requirements(scene.prim_count(), &params);
+    let reference = depth_first(&scene, &params, &req);
+    let mut room = Room::new(&req);
+    let (storage, scratch) = room.parts();
+    let b = kd::build_begin_for_threads(&scene, &params, storage, scratch, 1).unwrap();
+    assert_eq!(b.job_count(), 1);
+    let (tree, report) = b.finish_with_report().unwrap();
+    assert_eq!((report.reruns, report.one_pass), (0, false), "{report:?}");
+    assert!(made(&tree) == reference);
+}
+
+/// At the ideal room SPD gears' jobs for two threads fit their shares:
+/// its tree takes 3.9 references per primitive and one of its two jobs
+/// more than 4, so before the references' slack (`kd::REFS_SLACK`) that
+/// job ran out of its share and ran again alone in `finish`.
+#[test]
+fn gears_jobs_for_two_threads_fit_their_shares_at_the_ideal_room() {
+    let mesh = spd_mesh("gears", None);
+    let scene = mesh.scene();
+    let params = KdParams::auto();
+    let req = kd::requirements(scene.prim_count(), &params);
+    let reference = depth_first(&scene, &params, &req);
+    let (m, report) = by_jobs(&scene, &params, &req, Run::Threads(2));
+    assert_eq!(report.jobs, 2, "{report:?}");
+    assert_eq!((report.reruns, report.one_pass), (0, false), "{report:?}");
+    assert!(m == reference);
+}
+
 /// With the least room every job runs out of its share; `finish` then
 /// builds in one pass: the depth-first build's (truncated) tree.
 #[test]

@@ -77,10 +77,12 @@ pub struct CorayKdParams {
     pub omit_ropes: u32,
     /// Threads that `coray_kdtree_build_jobs`' runner will run the jobs on
     /// (0: not known, the default). The build's top is split until each
-    /// job holds about that fraction of the primitives (from a half for 1
-    /// or 2 threads to a sixteenth; a quarter when not known), so that two
-    /// threads wait less on the top and many find jobs enough. The tree is
-    /// the same bytes whatever it says. Since 1.4.
+    /// job holds about that fraction of the primitives (the whole tree for
+    /// 1 thread, a half for 2, down to a sixteenth; a quarter when not
+    /// known), so that two threads wait less on the top and many find jobs
+    /// enough. Without a runner (`coray_kdtree_build`) the build is one
+    /// job whatever it says. The tree is the same bytes whatever it says.
+    /// Since 1.4.
     pub job_threads: u32,
     /// What a reference costs a split, in ray-primitive tests per ray
     /// through the scene's box (0 or more, finite): a split that adds `k`
@@ -344,7 +346,13 @@ pub unsafe extern "C" fn coray_kdtree_build_jobs(
         let mut regions = Regions::new();
         // SAFETY: the caller passes valid scene and params pointers or NULL.
         let (scene, c) = unsafe { (carve::scene(scene, &mut regions)?, carve::read(params)?) };
-        let (p, threads) = (c.to_core()?, c.job_threads as usize);
+        // Without a runner every job runs here: one job, the whole tree.
+        let threads = if run_jobs.is_some() {
+            c.job_threads as usize
+        } else {
+            1
+        };
+        let p = c.to_core()?;
         let needed = OutValue::new(needed_bytes, true, &mut regions)?;
         let (base, sbase) = (arena.cast::<u8>(), scratch.cast::<u8>());
         check_arena(base)?;

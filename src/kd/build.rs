@@ -308,8 +308,8 @@ pub(super) fn check_build(
 }
 
 /// Builds an SAH kd-tree over `scene` into `storage`, using `scratch`, on
-/// the calling thread: [`super::build_begin`], then
-/// [`super::KdBuild::finish`] running every job.
+/// the calling thread: [`super::build_begin_for_threads`] for one thread
+/// (one job), then [`super::KdBuild::finish`] running it.
 ///
 /// Fails only for bad input (indices out of range, bad parameters) or for
 /// slices shorter than [`min_requirements`]. With less room than
@@ -321,7 +321,7 @@ pub fn build<'a>(
     storage: KdStorage<'a>,
     scratch: KdScratch<'_>,
 ) -> Result<KdTree<'a>, Error> {
-    super::build_begin(scene, params, storage, scratch)?.finish()
+    super::build_begin_for_threads(scene, params, storage, scratch, 1)?.finish()
 }
 
 /// The same tree as [`build`], built depth first in one pass over the whole

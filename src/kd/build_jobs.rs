@@ -48,8 +48,8 @@ const TOP_NODES: usize = 4 * KD_MAX_JOBS;
 /// primitives (plus [`JOB_SLACK`]) when the build is not told how many
 /// threads will run its jobs: a few top levels, so the part of the build
 /// that runs on one thread stays small, and jobs enough to balance two to
-/// eight threads. Told `t` threads, the fraction is `t` (2 to
-/// [`MAX_JOB_FRACTION`]): two threads then wait on one top split, not
+/// eight threads. Told `t` threads, the fraction is `t` (1 to
+/// [`MAX_JOB_FRACTION`]; one thread, one job): two threads then wait on one top split, not
 /// three (`coray bench --table build --threads 2`: SPD mount's two-thread
 /// build 3.7 -> 3.5 ms, balls 9.1 -> 8.7, tree 10.2 -> 9.8), and many find
 /// jobs enough.
@@ -153,9 +153,11 @@ pub fn build_begin<'s, 'a>(
 
 /// [`build_begin`] for jobs that `threads` threads will run (0: not
 /// known): the top is split until each job holds about a `threads`-th of
-/// the primitives (a half at most, a sixteenth at least; a quarter when not
-/// known), so that few threads wait less on the top's splits and many
-/// find jobs enough. The tree does not depend on it.
+/// the primitives (a sixteenth at least; a quarter when not known), so
+/// that few threads wait less on the top's splits and many find jobs
+/// enough. One thread gets one job, the whole tree in all the room: no
+/// share to outgrow (SPD gears, whose second of two jobs outgrew its share
+/// and ran again: 105 -> 78 ms). The tree does not depend on it.
 pub fn build_begin_for_threads<'s, 'a>(
     scene: &Scene<'a>,
     params: &KdParams,
@@ -169,7 +171,7 @@ pub fn build_begin_for_threads<'s, 'a>(
     let root = b.root_task();
     let fraction = match threads {
         0 => JOB_FRACTION,
-        t => t.clamp(2, MAX_JOB_FRACTION),
+        t => t.min(MAX_JOB_FRACTION),
     };
     let job_prims = (root.prims / fraction + root.prims / JOB_SLACK).max(MIN_JOB_PRIMS);
     let mut specs = [JobSpec {

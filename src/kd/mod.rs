@@ -219,8 +219,9 @@ pub struct KdRequirements {
 
 /// The room for a tree of `prim_count` primitives that does not stop
 /// splitting for lack of space in ordinary scenes: `refs_per_prim * N`
-/// references, [`NODES_PER_REF`] nodes per reference, and
-/// [`EVENTS_PER_REF`] events of scratch per reference.
+/// references and a [`REFS_SLACK`]-th more, [`NODES_PER_REF`] nodes and
+/// [`EVENTS_PER_REF`] events of scratch per reference of `refs_per_prim *
+/// N`.
 ///
 /// A build given less (down to [`min_requirements`]) still succeeds; it
 /// stops splitting where room runs out and sets [`KD_FLAG_TRUNCATED`]. A
@@ -229,18 +230,30 @@ pub struct KdRequirements {
 /// or more nodes per reference; it is then truncated too.
 pub fn requirements(prim_count: usize, params: &KdParams) -> KdRequirements {
     let n = prim_count.max(1);
-    let refs = n * params.refs_per_prim.max(1) as usize;
-    let nodes = refs * NODES_PER_REF.0 / NODES_PER_REF.1 + 1;
+    let asked = n * params.refs_per_prim.max(1) as usize;
+    let refs = asked + asked / REFS_SLACK;
+    let nodes = asked * NODES_PER_REF.0 / NODES_PER_REF.1 + 1;
     let leaves = nodes.div_ceil(2);
     KdRequirements {
         nodes,
         ropes: if params.ropes { leaves } else { 0 },
         rope_ids: if params.ropes { nodes } else { 0 },
         refs,
-        events: EVENTS_PER_REF * refs,
+        events: EVENTS_PER_REF * asked,
         prim_flags: prim_count,
     }
 }
+
+/// The references [`requirements`] asks for beyond `refs_per_prim` per
+/// primitive, as a fraction of them: a sixteenth (4.25 per primitive at
+/// the default 4; one byte per primitive more). A job build shares the
+/// references among its jobs in proportion to their primitives, not to
+/// what their subtrees need: SPD gears' tree takes 3.9 per primitive, and
+/// one of its two jobs more than 4, so it ran out of its share and ran
+/// again alone, after the others (`coray bench --table build --threads 2`:
+/// gears' two-thread build 1.45x the one-thread one's speed). Nodes and
+/// events are not raised with them.
+pub const REFS_SLACK: usize = 16;
 
 /// Nodes [`requirements`] asks for per reference, as a fraction: 5/2.
 /// Trees take about two nodes per reference they hold (an empty leaf
