@@ -19,5 +19,6 @@ pub use ray::{Hit, PreparedRay, Ray, INVALID_ID};
 pub use scene::{Scene, GEOM_CONES, GEOM_SPHERES, GEOM_TRIANGLES};
 pub use sphere::Sphere;
 pub use triangle::{
-    clip_triangle_bounds, intersect_triangle, intersect_triangles4, Corners4, Hits4, TRI_LANES,
+    clip_triangle_bounds, clip_triangle_bounds_split, intersect_triangle, intersect_triangles4,
+    Corners4, Hits4, TRI_LANES,
 };

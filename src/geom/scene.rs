@@ -1,4 +1,7 @@
-use super::{clip_triangle_bounds, intersect_triangle, Aabb, Cone, Hit, PreparedRay, Sphere};
+use super::{
+    clip_triangle_bounds, clip_triangle_bounds_split, intersect_triangle, Aabb, Cone, Hit,
+    PreparedRay, Sphere,
+};
 use crate::Error;
 use glam::Vec3;
 
@@ -145,6 +148,29 @@ impl<'a> Scene<'a> {
                 Some(b)
             }
         }
+    }
+
+    /// [`Self::clipped_bounds`] of `prim` in both children of `voxel`
+    /// split at `pos` on `axis` (the box below `pos` first), bit for bit
+    /// the same; a triangle's clipping shares the faces both children keep
+    /// ([`super::clip_triangle_bounds_split`]).
+    pub fn clipped_bounds_split(
+        &self,
+        prim: usize,
+        voxel: &Aabb,
+        axis: usize,
+        pos: f32,
+    ) -> [Option<Aabb>; 2] {
+        if prim < self.triangles.len() {
+            return clip_triangle_bounds_split(self.triangle(prim), voxel, axis, pos);
+        }
+        let Some(b) = self.prim_bounds(prim) else {
+            return [None, None];
+        };
+        let (mut below, mut above) = (*voxel, *voxel);
+        below.max[axis] = pos;
+        above.min[axis] = pos;
+        [below, above].map(|v| Some(b.intersection(&v)).filter(|c| !c.is_empty()))
     }
 
     /// Which geometry (`GEOM_TRIANGLES`, `GEOM_SPHERES`, `GEOM_CONES`) the

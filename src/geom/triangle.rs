@@ -132,72 +132,154 @@ pub fn intersect_triangles4(r: &PreparedRay, c: &Corners4, t_max: f32) -> Hits4 
 /// the split clipping of the kd build: a straddling triangle's events come
 /// from its clipped part, not from its whole box.
 pub fn clip_triangle_bounds(v: [Vec3; 3], voxel: &Aabb) -> Option<Aabb> {
-    // A convex polygon clipped by 6 planes has at most 3 + 6 vertices; the
-    // two buffers take turns as input and output.
-    let mut a = [Vec3::ZERO; 9];
-    let mut b = [Vec3::ZERO; 9];
-    a[..3].copy_from_slice(&v);
-    let mut n = 3;
-    n = clip_plane::<0, false>(&a, n, &mut b, voxel.min.x)?;
-    n = clip_plane::<0, true>(&b, n, &mut a, voxel.max.x)?;
-    n = clip_plane::<1, false>(&a, n, &mut b, voxel.min.y)?;
-    n = clip_plane::<1, true>(&b, n, &mut a, voxel.max.y)?;
-    n = clip_plane::<2, false>(&a, n, &mut b, voxel.min.z)?;
-    n = clip_plane::<2, true>(&b, n, &mut a, voxel.max.z)?;
-    let mut bounds = Aabb::EMPTY;
-    for p in &a[..n] {
-        bounds = bounds.grow(*p);
-    }
-    let bounds = bounds.intersection(voxel);
-    if bounds.is_empty() {
-        None
-    } else {
-        Some(bounds)
-    }
+    let (mut a, mut b) = (Polygon::of(v), Polygon::EMPTY);
+    let (mut p, mut spare) = (&mut a, &mut b);
+    clip_faces(&mut p, &mut spare, &faces(voxel), 0, 6)?;
+    p.bounds_in(voxel)
 }
 
-/// One Sutherland-Hodgman step: the polygon `poly[..n]` clipped to the
-/// inner side of the plane `p[AXIS] = plane` (below it when `KEEP_BELOW`),
-/// written to `out`; returns its vertex count, `None` when nothing is
-/// left. A plane with every vertex on its inner side copies the polygon
-/// as it is (same vertices, same order). The axis and side are constants
-/// so that each of the six steps compiles to straight-line code.
+/// [`clip_triangle_bounds`] of `v` in both children of `voxel` split at
+/// `pos` on `axis` (the box below `pos` first), bit for bit the same: the
+/// faces both children share with `voxel` that come before the split's in
+/// the clipping order are clipped once (none for a split on x, two on y,
+/// four on z).
+pub fn clip_triangle_bounds_split(
+    v: [Vec3; 3],
+    voxel: &Aabb,
+    axis: usize,
+    pos: f32,
+) -> [Option<Aabb>; 2] {
+    let mut below = *voxel;
+    below.max[axis] = pos;
+    let mut above = *voxel;
+    above.min[axis] = pos;
+    let (mut a, mut b, mut c) = (Polygon::of(v), Polygon::EMPTY, Polygon::EMPTY);
+    let (mut p, mut spare) = (&mut a, &mut b);
+    let shared = 2 * axis;
+    if clip_faces(&mut p, &mut spare, &faces(voxel), 0, shared).is_none() {
+        return [None, None];
+    }
+    c.v[..p.n].copy_from_slice(&p.v[..p.n]);
+    c.n = p.n;
+    let low = clip_faces(&mut p, &mut spare, &faces(&below), shared, 6)
+        .and_then(|()| p.bounds_in(&below));
+    let mut q = &mut c;
+    let high = clip_faces(&mut q, &mut spare, &faces(&above), shared, 6)
+        .and_then(|()| q.bounds_in(&above));
+    [low, high]
+}
+
+/// A box's six faces in clipping order: min x, max x, min y, max y, min z,
+/// max z.
+fn faces(b: &Aabb) -> [f32; 6] {
+    [b.min.x, b.max.x, b.min.y, b.max.y, b.min.z, b.max.z]
+}
+
+/// Clips `*p` by faces `from..to` of `faces`, in order, keeping the inner
+/// side of each; `None` when nothing is left. A face with every vertex on
+/// its inner side leaves the polygon as it is (not copied): a face that
+/// cuts writes to `*spare`, and the two swap.
 #[inline(always)]
-fn clip_plane<const AXIS: usize, const KEEP_BELOW: bool>(
-    poly: &[Vec3; 9],
+fn clip_faces<'p>(
+    p: &mut &'p mut Polygon,
+    spare: &mut &'p mut Polygon,
+    faces: &[f32; 6],
+    from: usize,
+    to: usize,
+) -> Option<()> {
+    macro_rules! face {
+        ($i:literal, $axis:literal, $below:literal) => {
+            if from <= $i && $i < to && p.cut::<$axis, $below>(spare, faces[$i])? {
+                core::mem::swap(p, spare);
+            }
+        };
+    }
+    face!(0, 0, false);
+    face!(1, 0, true);
+    face!(2, 1, false);
+    face!(3, 1, true);
+    face!(4, 2, false);
+    face!(5, 2, true);
+    Some(())
+}
+
+/// A convex polygon being clipped: at most 3 + 6 vertices (a triangle cut
+/// by six planes).
+struct Polygon {
+    v: [Vec3; 9],
     n: usize,
-    out: &mut [Vec3; 9],
-    plane: f32,
-) -> Option<usize> {
-    let inside = |p: Vec3| {
-        if KEEP_BELOW {
-            p[AXIS] <= plane
-        } else {
-            p[AXIS] >= plane
-        }
+}
+
+impl Polygon {
+    const EMPTY: Polygon = Polygon {
+        v: [Vec3::ZERO; 9],
+        n: 0,
     };
-    if poly[..n].iter().all(|&p| inside(p)) {
-        out[..n].copy_from_slice(&poly[..n]);
-        return Some(n);
+
+    fn of(t: [Vec3; 3]) -> Polygon {
+        let mut p = Polygon::EMPTY;
+        p.v[..3].copy_from_slice(&t);
+        p.n = 3;
+        p
     }
-    let mut m = 0;
-    for i in 0..n {
-        let p = poly[i];
-        let q = poly[if i + 1 == n { 0 } else { i + 1 }];
-        let (pin, qin) = (inside(p), inside(q));
-        if pin {
-            out[m] = p;
-            m += 1;
+
+    /// One Sutherland-Hodgman step: the polygon clipped to the inner side
+    /// of the plane `p[AXIS] = plane` (below it when `KEEP_BELOW`), written
+    /// to `out`: `Some(true)`. `Some(false)` when every vertex is on the
+    /// inner side (nothing written: the polygon stays as it is), `None`
+    /// when nothing is left. The axis and side are constants so that each
+    /// of the six steps compiles to straight-line code.
+    #[inline(always)]
+    fn cut<const AXIS: usize, const KEEP_BELOW: bool>(
+        &self,
+        out: &mut Polygon,
+        plane: f32,
+    ) -> Option<bool> {
+        let inside = |p: Vec3| {
+            if KEEP_BELOW {
+                p[AXIS] <= plane
+            } else {
+                p[AXIS] >= plane
+            }
+        };
+        let (poly, n) = (&self.v, self.n);
+        if poly[..n].iter().all(|&p| inside(p)) {
+            return Some(false);
         }
-        if pin != qin && m < 9 {
-            let s = (plane - p[AXIS]) / (q[AXIS] - p[AXIS]);
-            let mut x = p + (q - p) * s;
-            x[AXIS] = plane;
-            out[m] = x;
-            m += 1;
+        let mut m = 0;
+        for i in 0..n {
+            let p = poly[i];
+            let q = poly[if i + 1 == n { 0 } else { i + 1 }];
+            let (pin, qin) = (inside(p), inside(q));
+            if pin {
+                out.v[m] = p;
+                m += 1;
+            }
+            if pin != qin && m < 9 {
+                let s = (plane - p[AXIS]) / (q[AXIS] - p[AXIS]);
+                let mut x = p + (q - p) * s;
+                x[AXIS] = plane;
+                out.v[m] = x;
+                m += 1;
+            }
+        }
+        out.n = m;
+        (m > 0).then_some(true)
+    }
+
+    /// The polygon's bounds within `voxel`, `None` when empty.
+    fn bounds_in(&self, voxel: &Aabb) -> Option<Aabb> {
+        let mut bounds = Aabb::EMPTY;
+        for p in &self.v[..self.n] {
+            bounds = bounds.grow(*p);
+        }
+        let bounds = bounds.intersection(voxel);
+        if bounds.is_empty() {
+            None
+        } else {
+            Some(bounds)
         }
     }
-    (m > 0).then_some(m)
 }
 
 #[cfg(test)]
@@ -310,6 +392,59 @@ mod tests {
             clipped > 1000 && whole > 100 && none > 1000,
             "{clipped} {whole} {none}"
         );
+    }
+
+    /// Clipping into both children of a split at once, sharing the faces
+    /// before the split's, gives each child's bounds bit for bit as
+    /// clipping by its six faces: splits on every axis, through, beside and
+    /// on the triangle's vertices.
+    #[test]
+    fn split_clipping_equals_clipping_each_child_by_every_plane() {
+        let mut rng = SplitMix64(78);
+        let coord = |rng: &mut SplitMix64| grid_coord(rng, 4);
+        let bits = |b: Option<Aabb>| {
+            b.map(|b| {
+                (
+                    b.min.to_array().map(f32::to_bits),
+                    b.max.to_array().map(f32::to_bits),
+                )
+            })
+        };
+        let mut seen = [[0; 4]; 3];
+        for _ in 0..20_000 {
+            let mut p = || Vec3::new(coord(&mut rng), coord(&mut rng), coord(&mut rng));
+            let v = [p(), p(), p()];
+            let (a, b) = (p(), p());
+            let voxel = Aabb {
+                min: a.min(b),
+                max: a.max(b),
+            };
+            let axis = rng.below(3) as usize;
+            let pos = if rng.below(4) == 0 {
+                v[rng.below(3) as usize][axis].clamp(voxel.min[axis], voxel.max[axis])
+            } else {
+                let f = rng.next_f32();
+                voxel.min[axis] + f * (voxel.max[axis] - voxel.min[axis])
+            };
+            let (mut below, mut above) = (voxel, voxel);
+            below.max[axis] = pos;
+            above.min[axis] = pos;
+            let [low, high] = clip_triangle_bounds_split(v, &voxel, axis, pos);
+            assert_eq!(
+                bits(low),
+                bits(clip_every_plane(v, &below)),
+                "{v:?} in {voxel:?} at {pos} on {axis}"
+            );
+            assert_eq!(
+                bits(high),
+                bits(clip_every_plane(v, &above)),
+                "{v:?} in {voxel:?} at {pos} on {axis}"
+            );
+            seen[axis][low.is_some() as usize * 2 + high.is_some() as usize] += 1;
+        }
+        // Each axis saw triangles in neither child, in one, in the other
+        // and in both.
+        assert!(seen.iter().flatten().all(|&n| n > 100), "{seen:?}");
     }
 
     /// Each lane of the four-lane test answers as the one-triangle test:

@@ -868,7 +868,8 @@ impl<'s, 'a> Builder<'s, 'a> {
         // The order the straddlers come in does not matter: their new
         // events are sorted below, and no two events share a key.
         let mut clip = |b: &mut Self, prim: usize| {
-            if let Some(c) = b.scene.clipped_bounds(prim, &lv) {
+            let [left, right] = b.scene.clipped_bounds_split(prim, &task.voxel, k, p);
+            if let Some(c) = left {
                 nl_new += 1;
                 for (axis, n) in tl.iter_mut().enumerate() {
                     let mut at = top + axis * s2 + *n;
@@ -876,7 +877,7 @@ impl<'s, 'a> Builder<'s, 'a> {
                     *n = at - top - axis * s2;
                 }
             }
-            if let Some(c) = b.scene.clipped_bounds(prim, &rv) {
+            if let Some(c) = right {
                 nr_new += 1;
                 for (axis, n) in tr.iter_mut().enumerate() {
                     let base = top + 6 * straddling + axis * s2;
