@@ -390,7 +390,8 @@ fn jobs_that_show_the_room_too_small_skip_the_greedy_pass() {
 }
 
 /// Whatever the reference room, from far too little to plenty, the job
-/// build is the depth-first build's tree: the greedy pass is skipped only
+/// build (and the one job of a build for one thread) is the depth-first
+/// build's tree: the greedy pass is skipped only
 /// where it would have run out (and it is, on some of these rooms; on
 /// others the one pass runs greedy first, or the jobs make the tree).
 #[test]
@@ -421,6 +422,10 @@ fn job_build_equals_depth_first_at_every_room() {
             let reference = depth_first(&scene, &params, &req);
             let (m, report) = by_jobs(&scene, &params, &req, Run::ByFinish);
             assert!(m == reference, "{tris} {refs}: {report:?}");
+            // One job for one thread (as `kd::build` makes): the same tree.
+            let (one, one_report) = by_jobs(&scene, &params, &req, Run::Threads(1));
+            assert_eq!(one_report.jobs, 1);
+            assert!(one == reference, "{tris} {refs}, one job: {one_report:?}");
             match (report.one_pass, report.fair_pass_only) {
                 (true, true) => skipped += 1,
                 (true, false) => greedy += 1,
