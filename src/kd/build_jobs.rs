@@ -49,10 +49,10 @@ const TOP_NODES: usize = 4 * KD_MAX_JOBS;
 /// threads will run its jobs: a few top levels, so the part of the build
 /// that runs on one thread stays small, and jobs enough to balance two to
 /// eight threads. Told `t` threads, the fraction is `t` (1 to
-/// [`MAX_JOB_FRACTION`]; one thread, one job): two threads then wait on one top split, not
-/// three (`coray bench --table build --threads 2`: SPD mount's two-thread
-/// build 3.7 -> 3.5 ms, balls 9.1 -> 8.7, tree 10.2 -> 9.8), and many find
-/// jobs enough.
+/// [`MAX_JOB_FRACTION`]; one thread, one job): two threads then wait on
+/// one top split, not three (`coray bench --table build --threads 2`: SPD
+/// mount's two-thread build 3.7 -> 3.5 ms, balls 9.1 -> 8.7, tree 10.2 ->
+/// 9.8), and many find jobs enough.
 const JOB_FRACTION: usize = 4;
 
 /// The largest fraction a thread count sets (its jobs, with the slack's
