@@ -308,13 +308,10 @@ fn one_thread_gets_one_job() {
     let params = KdParams::auto();
     let req = kd::requirements(scene.prim_count(), &params);
     let reference = depth_first(&scene, &params, &req);
-    let mut room = Room::new(&req);
-    let (storage, scratch) = room.parts();
-    let b = kd::build_begin_for_threads(&scene, &params, storage, scratch, 1).unwrap();
-    assert_eq!(b.job_count(), 1);
-    let (tree, report) = b.finish_with_report().unwrap();
+    let (m, report) = by_jobs(&scene, &params, &req, Run::Threads(1));
+    assert_eq!(report.jobs, 1, "{report:?}");
     assert_eq!((report.reruns, report.one_pass), (0, false), "{report:?}");
-    assert!(made(&tree) == reference);
+    assert!(m == reference);
 }
 
 /// At the ideal room SPD gears' jobs for two threads fit their shares:

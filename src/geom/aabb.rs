@@ -44,6 +44,16 @@ impl Aabb {
         }
     }
 
+    /// The two parts of the box cut by the plane at `pos` on `axis`: below
+    /// it, then above it (a kd split's children).
+    #[inline]
+    pub fn split(&self, axis: usize, pos: f32) -> [Aabb; 2] {
+        let (mut below, mut above) = (*self, *self);
+        below.max[axis] = pos;
+        above.min[axis] = pos;
+        [below, above]
+    }
+
     /// True when no point lies inside (a flat box is not empty).
     #[inline]
     pub fn is_empty(&self) -> bool {

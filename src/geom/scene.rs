@@ -167,10 +167,9 @@ impl<'a> Scene<'a> {
         let Some(b) = self.prim_bounds(prim) else {
             return [None, None];
         };
-        let (mut below, mut above) = (*voxel, *voxel);
-        below.max[axis] = pos;
-        above.min[axis] = pos;
-        [below, above].map(|v| Some(b.intersection(&v)).filter(|c| !c.is_empty()))
+        voxel
+            .split(axis, pos)
+            .map(|v| Some(b.intersection(&v)).filter(|c| !c.is_empty()))
     }
 
     /// Which geometry (`GEOM_TRIANGLES`, `GEOM_SPHERES`, `GEOM_CONES`) the

@@ -149,10 +149,7 @@ pub fn clip_triangle_bounds_split(
     axis: usize,
     pos: f32,
 ) -> [Option<Aabb>; 2] {
-    let mut below = *voxel;
-    below.max[axis] = pos;
-    let mut above = *voxel;
-    above.min[axis] = pos;
+    let [below, above] = voxel.split(axis, pos);
     let (mut a, mut b, mut c) = (Polygon::of(v), Polygon::EMPTY, Polygon::EMPTY);
     let (mut p, mut spare) = (&mut a, &mut b);
     let shared = 2 * axis;
@@ -428,9 +425,7 @@ mod tests {
                 let f = rng.next_f32();
                 voxel.min[axis] + f * (voxel.max[axis] - voxel.min[axis])
             };
-            let (mut below, mut above) = (voxel, voxel);
-            below.max[axis] = pos;
-            above.min[axis] = pos;
+            let [below, above] = voxel.split(axis, pos);
             let [low, high] = clip_triangle_bounds_split(v, &voxel, axis, pos);
             assert_eq!(
                 bits(low),

@@ -219,18 +219,6 @@ fn area_along<const AXIS: usize>(extent: [f64; 3], along: f32) -> f64 {
     area_of_extent(e)
 }
 
-fn with_max(b: &Aabb, axis: usize, v: f32) -> Aabb {
-    let mut r = *b;
-    r.max[axis] = v;
-    r
-}
-
-fn with_min(b: &Aabb, axis: usize, v: f32) -> Aabb {
-    let mut r = *b;
-    r.min[axis] = v;
-    r
-}
-
 /// Where a tree's first pair of children goes: after the root, and after
 /// the shared empty leaf ([`SHARED_EMPTY`]) in a compact tree.
 pub(super) fn first_pair(params: &KdParams) -> usize {
@@ -860,8 +848,7 @@ impl<'s, 'a> Builder<'s, 'a> {
             self.truncated = true;
             return None;
         }
-        let lv = with_max(&task.voxel, k, p);
-        let rv = with_min(&task.voxel, k, p);
+        let [lv, rv] = task.voxel.split(k, p);
         let mut tl = [0usize; 3];
         let mut tr = [0usize; 3];
         let (mut nl_new, mut nr_new) = (0, 0);
@@ -1037,7 +1024,7 @@ impl<'s, 'a> Builder<'s, 'a> {
             prims: 0,
             ref_budget: 0,
         };
-        let (lv, rv) = (with_max(&task.voxel, k, p), with_min(&task.voxel, k, p));
+        let [lv, rv] = task.voxel.split(k, p);
         if elide {
             // The empty leaf, made where it stands: a leaf of the tree's
             // count and depth.

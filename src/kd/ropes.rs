@@ -80,10 +80,7 @@ pub(super) fn build_ropes(
         }
         rope_ids[node as usize] = NO_NODE;
         let (axis, split, left) = (n.axis(), n.split(), n.left());
-        let mut lb = bounds;
-        lb.max[axis] = split;
-        let mut rb = bounds;
-        rb.min[axis] = split;
+        let [lb, rb] = bounds.split(axis, split);
         let mut ll = links;
         ll[2 * axis + 1] = left + 1;
         let mut rl = links;
