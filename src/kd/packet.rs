@@ -240,7 +240,7 @@ impl Packet {
     /// Lane `i` as the single ray's prepared form (for the cases a lane
     /// decides alone: spheres, cones, triangle edges).
     #[inline(always)]
-    fn ray(&self, i: usize) -> PreparedRay {
+    pub(crate) fn ray(&self, i: usize) -> PreparedRay {
         if self.odd_k.get(i) {
             let o = Vec3::new(self.o[0].0[i], self.o[1].0[i], self.o[2].0[i]);
             let d = Vec3::new(self.d[0].0[i], self.d[1].0[i], self.d[2].0[i]);

@@ -223,7 +223,7 @@ fn trace_packet(
     for (c, &near) in cursors.iter_mut().zip(nearest) {
         *c = Cursor::new(paths, near);
     }
-    let mut lanes = Lanes::new(rays, t1);
+    let mut lanes = Lanes::new(p, t1);
     // The common leaves, as walk_common visits them: a run of empty leaves
     // is one step and no test.
     let mut last = None;
@@ -293,8 +293,8 @@ fn test_leaf(
 /// test its primitives together, the leaf entered nearest the eye first:
 /// lanes that part for a leaf or two meet again behind it.
 struct Lanes<'r> {
-    /// The packet's rays.
-    rays: &'r [Ray],
+    /// The packet.
+    packet: &'r Packet,
     /// Where each lane's segment ends.
     t1: F8,
     /// Lanes still walking.
@@ -312,9 +312,9 @@ struct Lanes<'r> {
 }
 
 impl<'r> Lanes<'r> {
-    fn new(rays: &'r [Ray], t1: F8) -> Self {
+    fn new(packet: &'r Packet, t1: F8) -> Self {
         Lanes {
-            rays,
+            packet,
             t1,
             on: M8::NONE,
             redo: M8::NONE,
@@ -324,11 +324,13 @@ impl<'r> Lanes<'r> {
         }
     }
 
-    /// Lane `i`'s single prepared ray.
+    /// Lane `i`'s single prepared ray: the packet's lane, which holds
+    /// what [`PreparedRay::new`] computes for the ray (no division made
+    /// again).
     #[inline(always)]
     fn prepared(&mut self, i: usize) -> &PreparedRay {
-        let rays = self.rays;
-        self.prepared[i].get_or_insert_with(|| PreparedRay::new(&rays[i]))
+        let p = self.packet;
+        self.prepared[i].get_or_insert_with(|| p.ray(i))
     }
 
     /// Lane `i` goes on to `next` (its next leaf, entered at `t`), ends
