@@ -1,5 +1,5 @@
-/* LCTS through the C ABI: every casting scheme gives the hierarchical
- * traversal's image bit for bit; patch-to-patch visibility equals casting
+/* LCTS through the C ABI: every casting scheme (the packet tiles too)
+ * gives the hierarchical traversal's image bit for bit; patch-to-patch visibility equals casting
  * the same segments one by one; bad parameters get their status. */
 #include "common.h"
 
@@ -41,10 +41,12 @@ int main(void) {
         for (i = 0; i < n; i++) nhit += ref[i].geom_id != CORAY_INVALID_ID;
         CHECK(nhit > n / 10);
     }
-    for (scheme = CORAY_CAST_ROPES; scheme <= CORAY_CAST_HLCTS_2D; scheme++) {
+    for (scheme = CORAY_CAST_ROPES; scheme <= CORAY_CAST_PACKETS; scheme++) {
         cp = coray_cast_params_default();
         cp.scheme = scheme;
         CHECK_STATUS(coray_kdtree_cast_requirements(&cam, &cp, &cr), CORAY_STATUS_OK);
+        /* Packets need no scratch, as the hierarchical cast. */
+        if (scheme == CORAY_CAST_PACKETS) CHECK(cr.scratch_bytes == 0 && cr.stack_bytes == CORAY_KDTREE_STACK_BYTES);
         scratch = arena_alloc(cr.scratch_bytes);
         if (cr.scratch_bytes > 0) {
             CHECK_STATUS(coray_kdtree_cast_image(&tree.tree, &cam, &cp, scratch, cr.scratch_bytes - 1, &stack, sizeof stack, hits, &st), CORAY_STATUS_ARENA_TOO_SMALL);
@@ -54,7 +56,9 @@ int main(void) {
         memset(hits, 0, n * sizeof(CorayHit));
         CHECK_STATUS(coray_kdtree_cast_image(&tree.tree, &cam, &cp, scratch, cr.scratch_bytes, &stack, sizeof stack, hits, &st), CORAY_STATUS_OK);
         CHECK(memcmp(hits, ref, n * sizeof(CorayHit)) == 0);
-        if (scheme >= CORAY_CAST_SLCTS_1D) CHECK(st.windows > 0);
+        CHECK(st.rays == st_ref.rays);
+        if (scheme >= CORAY_CAST_SLCTS_1D && scheme <= CORAY_CAST_HLCTS_2D) CHECK(st.windows > 0);
+        if (scheme == CORAY_CAST_PACKETS) CHECK(st.windows == 0);
         /* Only SLCTS windows without a shared leaf start at an entry node. */
         CHECK(st.windows_entered <= st.windows - st.windows_shared);
         if (scheme != CORAY_CAST_SLCTS_1D && scheme != CORAY_CAST_SLCTS_2D) CHECK(st.windows_entered == 0);
@@ -68,9 +72,15 @@ int main(void) {
     cp = coray_cast_params_default();
     cp.scheme = 9;
     CHECK_STATUS(coray_kdtree_cast_requirements(&cam, &cp, &cr), CORAY_STATUS_INVALID_PARAMETER);
+    cp.scheme = CORAY_CAST_PACKETS + 1;
+    CHECK_STATUS(coray_kdtree_cast_requirements(&cam, &cp, &cr), CORAY_STATUS_INVALID_PARAMETER);
     cp = coray_cast_params_default();
+    cp.scheme = CORAY_CAST_SLCTS_2D;
     cp.window_width = 1;
     CHECK_STATUS(coray_kdtree_cast_requirements(&cam, &cp, &cr), CORAY_STATUS_INVALID_PARAMETER);
+    /* Packets have no windows: the window fields are not read. */
+    cp.scheme = CORAY_CAST_PACKETS;
+    CHECK_STATUS(coray_kdtree_cast_requirements(&cam, &cp, &cr), CORAY_STATUS_OK);
     cp = coray_cast_params_default();
     cp.history_capacity = 0;
     CHECK_STATUS(coray_kdtree_cast_requirements(&cam, &cp, &cr), CORAY_STATUS_INVALID_PARAMETER);
@@ -93,7 +103,15 @@ int main(void) {
         CHECK_STATUS(coray_kdtree_cast_requirements(NULL, &cp, &cr), CORAY_STATUS_NULL_POINTER);
     }
     cp = coray_cast_params_default();
+    cp.scheme = CORAY_CAST_SLCTS_2D; /* a scheme with scratch */
     CHECK_STATUS(coray_kdtree_cast_image(&tree.tree, &cam, &cp, NULL, 0, &stack, sizeof stack, hits, NULL), CORAY_STATUS_NULL_POINTER);
+    /* The default scheme: packets, no scratch, on a tree without ropes too. */
+    cp = coray_cast_params_default();
+    CHECK(cp.scheme == CORAY_CAST_PACKETS && cp.window_width == 5 && cp.window_height == 5);
+    CHECK_STATUS(coray_kdtree_cast_requirements(&cam, &cp, &cr), CORAY_STATUS_OK);
+    CHECK(cr.scratch_bytes == 0);
+    CHECK_STATUS(coray_kdtree_cast_image(&tree.tree, &cam, &cp, NULL, 0, &stack, sizeof stack, hits, NULL), CORAY_STATUS_OK);
+    CHECK(memcmp(hits, ref, n * sizeof(CorayHit)) == 0);
 
     /* Patch-to-patch visibility against casting the same segments. */
     {
@@ -192,6 +210,12 @@ int main(void) {
                 CHECK(memcmp(hits, plain_ref, n * sizeof(CorayHit)) == 0);
                 free(scratch);
             }
+            /* Packets walk no ropes: the plain tree casts them. */
+            cp = coray_cast_params_default();
+            cp.scheme = CORAY_CAST_PACKETS;
+            memset(hits, 0xAB, n * sizeof(CorayHit));
+            CHECK_STATUS(coray_kdtree_cast_image(&plain.tree, &cam, &cp, NULL, 0, &stack, sizeof stack, hits, NULL), CORAY_STATUS_OK);
+            CHECK(memcmp(hits, plain_ref, n * sizeof(CorayHit)) == 0);
             CHECK_STATUS(coray_kdtree_patch_visibility(&plain.tree, a, 3, b, 3, 4, 1e-4f, ps, pr_req.scratch_bytes, &stack, sizeof stack, &r, NULL), CORAY_STATUS_NO_ROPES);
             CHECK(r.samples == 0);
             CHECK_STATUS(coray_kdtree_patch_visibility(&roped.tree, a, 3, b, 3, 4, 1e-4f, ps, pr_req.scratch_bytes, &stack, sizeof stack, &r, NULL), CORAY_STATUS_OK);

@@ -102,7 +102,8 @@ int main(int argc, char **argv) {
     cam.angle_deg = 45;
     cam.width = cam.height = (uint32_t)size;
 
-    /* The whole image in one call, by the LCTS scheme SLCTS-2D. */
+    /* The whole image in one call, in tiles of 4 x 2 rays (the default
+     * scheme; CORAY_CAST_SLCTS_2D and the other LCTS schemes need ropes). */
     CorayCastParams cast = coray_cast_params_default();
     CorayRequirements req = coray_requirements_default();
     CorayHit *hits = malloc((size_t)size * (size_t)size * sizeof *hits);
@@ -132,7 +133,7 @@ int main(int argc, char **argv) {
         fwrite(px, 1, 3, out);
     }
     fclose(out);
-    printf("%s: %u nodes, %u leaves, depth %u, validated; %dx%d cast by SLCTS-2D, %zu pixels hit -> %s\n", argv[1],
+    printf("%s: %u nodes, %u leaves, depth %u, validated; %dx%d cast in packets, %zu pixels hit -> %s\n", argv[1],
            shape.node_count, shape.leaf_count, shape.depth, size, size, hit_count, argv[2]);
     free(hits);
     free(scratch);

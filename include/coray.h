@@ -626,6 +626,11 @@ typedef struct CorayWide {
 // HLCTS by 2D bisection, alternating axes.
 #define CORAY_CAST_HLCTS_2D 5
 
+// Every 4 x 2 pixel tile as one packet of eight rays that walk the tree
+// together (the widest kernel this CPU runs): no ropes, no scratch; the
+// fastest scheme on primary rays. Since 1.6.
+#define CORAY_CAST_PACKETS 6
+
 // SAH-driven termination, depth bound from N. The default.
 #define CORAY_KD_PRESET_AUTO 0
 
@@ -906,7 +911,10 @@ struct CorayCamera coray_camera_default(void);
 // A `CorayPatchResult` to fill, `struct_size` set.
 struct CorayPatchResult coray_patch_result_default(void);
 
-// Default cast parameters: SLCTS-2D, 5 x 5 windows, 256 records per history.
+// Default cast parameters: `CORAY_CAST_PACKETS` (the fastest scheme, and
+// one a tree without ropes casts), and for the LCTS schemes 5 x 5 windows
+// and 256 records per history. (Before 1.6 the default scheme was
+// `CORAY_CAST_SLCTS_2D`; every scheme gives the same hits.)
 struct CorayCastParams coray_cast_params_default(void);
 
 // Scratch and stack bytes `coray_kdtree_cast_image` needs for this camera
@@ -923,7 +931,9 @@ enum CorayStatus coray_kdtree_cast_requirements(const struct CorayCamera *camera
 // pixel (x, y), exactly what hierarchical traversal gives (every scheme).
 // `scratch` (16-byte aligned, the requirements' `scratch_bytes`; NULL
 // when that is 0) is free again afterwards; `stack` as for
-// `coray_kdtree_intersect`; `stats` may be NULL.
+// `coray_kdtree_intersect`; `stats` may be NULL. Every scheme but
+// `CORAY_CAST_HIERARCHICAL` and `CORAY_CAST_PACKETS` walks ropes: a tree
+// without them gets `CORAY_STATUS_NO_ROPES` and nothing is written.
 //
 // Safety: `tree` as in `coray_kdtree_info`; `hits` holds `width * height`
 // elements; `scratch` and `stack` are writable for their sizes and used

@@ -77,6 +77,7 @@ fn exercise_kd(t: &KdTree, rays: &[Ray]) -> (Vec<Hit>, bool) {
         Slcts2d { n: 5, m: 5 },
         Hlcts1d,
         Hlcts2d,
+        Packets,
     ] {
         let req = coray::lcts::image_requirements(12, 9, scheme, 64);
         let mut o = OwnedCast::new(&req);

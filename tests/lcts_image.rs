@@ -9,8 +9,9 @@ use coray::lcts::{cast_image, image_requirements, HistoryRecord, Scheme};
 use coray_scenes::spd::{self, Options};
 use coray_scenes::SceneMesh;
 
-const SCHEMES: [Scheme; 6] = [
+const SCHEMES: [Scheme; 7] = [
     Scheme::Ropes,
+    Scheme::Packets,
     Scheme::Slcts1d { n: 5 },
     Scheme::Slcts2d { n: 5, m: 5 },
     Scheme::Slcts2d { n: 2, m: 3 },

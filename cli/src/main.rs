@@ -75,7 +75,8 @@ enum Command {
         /// The SPD testing procedure: 512x512 pixels (or --res N), eye rays
         /// through the pixel corners, ray tree depth 5, the SPD's shadow and
         /// refraction rules; prints its ray statistics. `--accel` may also
-        /// name an LCTS cast (slcts1d, slcts2d, hlcts1d, hlcts2d) for the eye rays.
+        /// name an image cast (slcts1d, slcts2d, hlcts1d, hlcts2d, cast-packets)
+        /// for the eye rays.
         #[arg(long)]
         spd: bool,
         /// With --spd: print the statistics as one JSON object.

@@ -184,6 +184,7 @@ fn bench_json_has_every_row_and_exact_ropes() {
         "kd-rope",
         "slcts2d",
         "hlcts2d",
+        "cast-packets",
         "tdbs",
         "rstar-reinsert",
     ] {

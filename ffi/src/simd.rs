@@ -118,6 +118,25 @@ impl Kernel for Avx2Windows {
         #[cfg(not(target_arch = "x86_64"))]
         window::trace(tree, shaft, paths, rays, nearest, hits, stack, stats);
     }
+
+    #[inline(always)]
+    fn packets(
+        self,
+        tree: &KdTree,
+        rays: &[Ray],
+        hits: &mut [Hit],
+        stack: &mut [KdStackItem],
+        stats: &mut TraceStats,
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: as in `trace` just above: an `Avx2Windows` exists only
+        // on a CPU with AVX2, the only feature the clone is compiled for.
+        unsafe {
+            tree.intersect_packets_avx2(rays, hits, stack, stats)
+        };
+        #[cfg(not(target_arch = "x86_64"))]
+        tree.intersect_packets(rays, hits, stack, stats);
+    }
 }
 
 /// [`coray::lcts::cast_image_with`] with the widest window kernel this CPU
@@ -239,9 +258,10 @@ mod tests {
         assert_eq!(a, c);
     }
 
-    /// Every LCTS cast by the AVX2 window kernel (where this CPU has it)
-    /// gives the baseline kernel's hits and counts, bit for bit, and the
-    /// hierarchical cast's hits.
+    /// Every LCTS cast by the AVX2 window kernel (where this CPU has it),
+    /// and the packet cast by the AVX2 packet walk, gives the baseline
+    /// kernel's hits and counts, bit for bit, and the hierarchical cast's
+    /// hits.
     #[test]
     fn avx2_window_kernel_casts_as_the_baseline() {
         use coray::lcts::{cast_image_by, image_requirements};
@@ -290,5 +310,13 @@ mod tests {
             assert_eq!(a, want, "{scheme:?}");
             assert!(sb.windows_shared > 0, "{scheme:?}");
         }
+        // The packet tiles, by the AVX2 packet clone: 96 x 80 pixels, all
+        // of them in full 4 x 2 tiles.
+        let (a, sa) = cast(Scheme::Packets, false);
+        let (b, sb) = cast(Scheme::Packets, true);
+        assert_eq!(a, b);
+        assert_eq!(sa.trace, sb.trace);
+        assert_eq!(a, want);
+        assert_eq!(sb.trace.rays, n as u64);
     }
 }

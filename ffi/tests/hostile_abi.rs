@@ -363,7 +363,11 @@ fn cast_scratch_may_not_overlap_the_tree_or_the_hits() {
     let (mut a, t) = kd(&s);
     let mut stack = arena(CORAY_KDTREE_STACK_BYTES);
     let cam = camera();
-    let p = coray_cast_params_default();
+    // A scheme with scratch (the default, packets, takes none).
+    let p = CorayCastParams {
+        scheme: CORAY_CAST_SLCTS_2D,
+        ..coray_cast_params_default()
+    };
     let mut r = requirements();
     unsafe {
         assert_eq!(

@@ -150,6 +150,20 @@ pub trait Kernel: Copy {
         stack: &mut [KdStackItem],
         stats: &mut TraceStats,
     );
+
+    /// [`KdTree::intersect_packets`], as this kernel compiles it: the
+    /// tiles of a [`super::Scheme::Packets`] cast.
+    #[inline(always)]
+    fn packets(
+        self,
+        tree: &KdTree,
+        rays: &[Ray],
+        hits: &mut [Hit],
+        stack: &mut [KdStackItem],
+        stats: &mut TraceStats,
+    ) {
+        tree.intersect_packets(rays, hits, stack, stats);
+    }
 }
 
 /// [`trace`] for the target's baseline (SSE2 on x86-64).
