@@ -322,16 +322,7 @@ pub fn cast_image_with_by<K: Kernel>(
     let mut st = CastStats::default();
     let stack = &mut *scratch.stack;
     match scheme {
-        Scheme::Hierarchical => {
-            for y in 0..h {
-                for x in 0..w {
-                    let hit =
-                        tree.intersect(&ray(x, y), Traversal::Hierarchical, stack, &mut st.trace);
-                    put(x, y, &hit);
-                }
-            }
-        }
-        Scheme::Packets => {
+        Scheme::Packets if cfg!(feature = "packets") => {
             let mut rays = [Ray::new(Vec3::ZERO, Vec3::X, 0.0, 0.0); LANES];
             let mut pixels = [(0u32, 0u32); LANES];
             let mut hits = [Hit::MISS; LANES];
@@ -345,17 +336,21 @@ pub fn cast_image_with_by<K: Kernel>(
                             n += 1;
                         }
                     }
-                    let (rays, hits) = (&rays[..n], &mut hits[..n]);
-                    if cfg!(feature = "packets") {
-                        kernel.packets(tree, rays, hits, stack, &mut st.trace);
-                    } else {
-                        for (r, hit) in rays.iter().zip(hits.iter_mut()) {
-                            *hit = tree.intersect(r, Traversal::Hierarchical, stack, &mut st.trace);
-                        }
-                    }
-                    for (&(x, y), hit) in pixels[..n].iter().zip(hits.iter()) {
+                    kernel.packets(tree, &rays[..n], &mut hits[..n], stack, &mut st.trace);
+                    for (&(x, y), hit) in pixels[..n].iter().zip(&hits[..n]) {
                         put(x, y, hit);
                     }
+                }
+            }
+        }
+        // Without the `packets` feature (small targets) the packet cast is
+        // the hierarchical one.
+        Scheme::Hierarchical | Scheme::Packets => {
+            for y in 0..h {
+                for x in 0..w {
+                    let hit =
+                        tree.intersect(&ray(x, y), Traversal::Hierarchical, stack, &mut st.trace);
+                    put(x, y, &hit);
                 }
             }
         }
