@@ -794,6 +794,11 @@ fn speed_table_has_the_c_abi_rows_and_no_mismatch() {
     let rows = v.as_array().unwrap();
     let sets: Vec<&str> = rows.iter().map(|r| r["set"].as_str().unwrap()).collect();
     assert_eq!(sets, ["primary", "shadow", "incoherent", "diffuse"]);
+    // The primary set has the image casts too, the packet tiles among them.
+    let primary = rows[0]["cells"].as_array().unwrap();
+    for m in ["slcts2d", "hlcts2d", "cast-packets"] {
+        assert!(primary.iter().any(|c| c["method"] == m), "{m}");
+    }
     for r in rows {
         let cells = r["cells"].as_array().unwrap();
         for m in ["kd", "kd-c", "kd-c1"] {

@@ -36,8 +36,13 @@ pub const RAY_METHODS: [&str; 8] = [
 ];
 
 /// The image casts timed on the primary set (one thread: a cast is one
-/// call over the camera's image).
-pub const CASTS: [Scheme; 2] = [Scheme::Slcts2d { n: 5, m: 5 }, Scheme::Hlcts2d];
+/// call over the camera's image): the two 2D LCTS schemes, and the packet
+/// tiles (the C cast's default).
+pub const CASTS: [Scheme; 3] = [
+    Scheme::Slcts2d { n: 5, m: 5 },
+    Scheme::Hlcts2d,
+    Scheme::Packets,
+];
 
 /// One method on one ray set.
 #[derive(Clone, Debug, Serialize)]
@@ -288,7 +293,9 @@ columns: rays = rays in the set (primary: one per pixel in 4 x 2 blocks; shadow:
   Mrays/s on the same rays (kd-c / kd-c1 / kd-c1-handle: kd through the C ABI, one
   coray_kdtree_intersect call per 4096 rays / one coray_kdtree_tracer_intersect1 call per
   ray on a tracer per thread / one coray_kdtree_intersect1 call per ray with the handle and
-  stack; occluded likewise); mism = rays of any coray method answering otherwise than the
+  stack; occluded likewise; slcts2d / hlcts2d / cast-packets: coray_kdtree_cast_image over
+  the camera's image, one thread, by SLCTS-2D, HLCTS-2D and 4 x 2 packet tiles, the C cast's
+  default); mism = rays of any coray method answering otherwise than the
   kd-tree's hierarchical traversal (Embree: beyond coray::tolerance's tie rules). Best of
   --repeat runs, methods interleaved.";
 
