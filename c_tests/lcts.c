@@ -68,6 +68,57 @@ int main(void) {
                (unsigned long long)st.windows_entered);
         free(scratch);
     }
+    /* Tiles of the image cast one by one into buffers of their own (uneven,
+     * a one-pixel column among them) give the whole image's hits, by every
+     * scheme; rectangles that are empty or leave the image are refused; a
+     * struct of 1.0's size (no rectangle fields) casts the whole image. */
+    {
+        const uint32_t xs[4] = {0, 1, 40, 97}, ys[3] = {0, 30, 61};
+        CorayHit *tile = malloc(n * sizeof(CorayHit));
+        size_t a, b, wrong = 0;
+        uint32_t x, y;
+        for (scheme = CORAY_CAST_HIERARCHICAL; scheme <= CORAY_CAST_PACKETS; scheme++) {
+            for (b = 0; b < 2; b++) {
+                for (a = 0; a < 3; a++) {
+                    cp = coray_cast_params_default();
+                    cp.scheme = scheme;
+                    cp.rect_x = xs[a];
+                    cp.rect_y = ys[b];
+                    cp.rect_width = xs[a + 1] - xs[a];
+                    cp.rect_height = ys[b + 1] - ys[b];
+                    CHECK_STATUS(coray_kdtree_cast_requirements(&cam, &cp, &cr), CORAY_STATUS_OK);
+                    scratch = arena_alloc(cr.scratch_bytes);
+                    CHECK_STATUS(coray_kdtree_cast_image(&tree.tree, &cam, &cp, scratch, cr.scratch_bytes, &stack, sizeof stack, tile, NULL), CORAY_STATUS_OK);
+                    for (y = 0; y < cp.rect_height; y++)
+                        for (x = 0; x < cp.rect_width; x++)
+                            wrong += memcmp(&tile[y * cp.rect_width + x], &ref[(size_t)(cp.rect_y + y) * cam.width + cp.rect_x + x], sizeof(CorayHit)) != 0;
+                    free(scratch);
+                }
+            }
+        }
+        CHECK(wrong == 0);
+        {
+            const uint32_t bad[4][4] = {{1, 0, 0, 0}, {0, 0, 5, 0}, {90, 0, 8, 61}, {0xFFFFFFFFu, 0, 2, 1}};
+            for (a = 0; a < 4; a++) {
+                cp = coray_cast_params_default();
+                cp.rect_x = bad[a][0];
+                cp.rect_y = bad[a][1];
+                cp.rect_width = bad[a][2];
+                cp.rect_height = bad[a][3];
+                CHECK_STATUS(coray_kdtree_cast_requirements(&cam, &cp, &cr), CORAY_STATUS_INVALID_PARAMETER);
+                CHECK_STATUS(coray_kdtree_cast_image(&tree.tree, &cam, &cp, NULL, 0, &stack, sizeof stack, tile, NULL), CORAY_STATUS_INVALID_PARAMETER);
+            }
+        }
+        cp = coray_cast_params_default();
+        cp.struct_size = offsetof(CorayCastParams, rect_x);
+        cp.rect_x = 3; /* beyond the caller's struct: not read */
+        cp.rect_width = 1;
+        CHECK_STATUS(coray_kdtree_cast_requirements(&cam, &cp, &cr), CORAY_STATUS_OK);
+        memset(hits, 0, n * sizeof(CorayHit));
+        CHECK_STATUS(coray_kdtree_cast_image(&tree.tree, &cam, &cp, NULL, 0, &stack, sizeof stack, hits, NULL), CORAY_STATUS_OK);
+        CHECK(memcmp(hits, ref, n * sizeof(CorayHit)) == 0);
+        free(tile);
+    }
     /* Bad parameters. */
     cp = coray_cast_params_default();
     cp.scheme = 9;

@@ -1,7 +1,7 @@
 /* Every structure traced from 4 threads at once gives, bit for bit, what
  * one thread gives: the kd-tree (both traversals), a TDBS hierarchy, an
- * R*-tree, the wide hierarchy, a projection hierarchy, LCTS image casts and patch-to-patch
- * visibility. Structures are shared read-only; each thread brings its own
+ * R*-tree, the wide hierarchy, a projection hierarchy, LCTS and packet
+ * image casts (whole and by tiles) and patch-to-patch visibility. Structures are shared read-only; each thread brings its own
  * stack and scratch. Run under helgrind by the test suite. */
 #include <pthread.h>
 
@@ -29,7 +29,7 @@ typedef struct {
 typedef struct {
     CorayHit hits[7][RAYS];
     uint8_t occ[7][RAYS];
-    CorayHit image[2][RES * RES];
+    CorayHit image[4][RES * RES];
     CorayPatchResult patch;
     CorayStatus status;
 } Out;
@@ -75,6 +75,27 @@ static void run_all(Out *o) {
         scratch = arena_alloc(req.scratch_bytes);
         note(o, coray_kdtree_cast_image(&s->kd.tree, &s->cam, &cp, scratch, req.scratch_bytes, &kst, sizeof kst, o->image[k], NULL));
         free(scratch);
+    }
+    /* The packet cast (the default scheme), of the whole image and of its
+     * four uneven tiles, each into a buffer of its own. */
+    {
+        CorayCastParams cp = coray_cast_params_default();
+        CorayHit tile[RES * RES];
+        const uint32_t cut[3] = {0, 17, RES};
+        uint32_t a, b, x, y;
+        note(o, coray_kdtree_cast_image(&s->kd.tree, &s->cam, &cp, NULL, 0, &kst, sizeof kst, o->image[2], NULL));
+        for (b = 0; b < 2; b++) {
+            for (a = 0; a < 2; a++) {
+                cp.rect_x = cut[a];
+                cp.rect_y = cut[b];
+                cp.rect_width = cut[a + 1] - cut[a];
+                cp.rect_height = cut[b + 1] - cut[b];
+                note(o, coray_kdtree_cast_image(&s->kd.tree, &s->cam, &cp, NULL, 0, &kst, sizeof kst, tile, NULL));
+                for (y = 0; y < cp.rect_height; y++)
+                    for (x = 0; x < cp.rect_width; x++)
+                        o->image[3][(cp.rect_y + y) * RES + cp.rect_x + x] = tile[y * cp.rect_width + x];
+            }
+        }
     }
     {
         float a[12] = {-0.5f, 1.2f, -0.5f, 0.5f, 1.2f, -0.5f, 0.5f, 1.2f, 0.5f, -0.5f, 1.2f, 0.5f};
@@ -184,6 +205,8 @@ int main(void) {
      * the wide one gives the kd-tree's hits bit for bit. */
     CHECK(memcmp(ref->occ[0], ref->occ[2], RAYS) == 0 && memcmp(ref->occ[0], ref->occ[3], RAYS) == 0);
     CHECK(memcmp(ref->occ[0], ref->occ[6], RAYS) == 0 && memcmp(ref->hits[0], ref->hits[6], sizeof ref->hits[0]) == 0);
+    /* Every image cast gives the same pixels, tiles or not. */
+    for (i = 1; i < 4; i++) CHECK(memcmp(ref->image[i], ref->image[0], sizeof ref->image[0]) == 0);
     free(s.kd.arena);
     for (i = 0; i < 4; i++) free(s.arenas[i]);
     free(ref);

@@ -332,6 +332,20 @@ typedef struct CorayCastParams {
   // Records kept per traversal history (1 to 2^20): larger shares more,
   // never changes results.
   uint32_t history_capacity;
+  // The pixels to cast (since 1.6): columns `rect_x` to `rect_x +
+  // rect_width - 1` and rows `rect_y` to `rect_y + rect_height - 1` of
+  // the camera's image, which must hold them; `hits` then holds
+  // `rect_width * rect_height` answers, row by row. Each pixel gets what
+  // the whole image's cast gives it, so threads may cast an image's tiles
+  // at once, each with its own scratch, stack and hits. All four 0 (the
+  // default, and a struct from before 1.6): the whole image.
+  uint32_t rect_x;
+  // See `rect_x`.
+  uint32_t rect_y;
+  // See `rect_x`.
+  uint32_t rect_width;
+  // See `rect_x`.
+  uint32_t rect_height;
 } CorayCastParams;
 
 // An opened kd-tree: fill it with `coray_kdtree_open`, pass it to every
@@ -926,9 +940,11 @@ enum CorayStatus coray_kdtree_cast_requirements(const struct CorayCamera *camera
                                                 const struct CorayCastParams *params,
                                                 struct CorayRequirements *out);
 
-// Casts one primary ray per pixel of the camera through the tree with the
-// scheme of `params`: `hits[y * width + x]` receives the closest hit of
-// pixel (x, y), exactly what hierarchical traversal gives (every scheme).
+// Casts one primary ray per pixel of the camera (or of the rectangle of
+// `params`) through the tree with the scheme of `params`: `hits[y * width
+// + x]` receives the closest hit of pixel (x, y) (of the rectangle's
+// pixel (x, y): `hits[y * rect_width + x]`), exactly what hierarchical
+// traversal gives (every scheme).
 // `scratch` (16-byte aligned, the requirements' `scratch_bytes`; NULL
 // when that is 0) is free again afterwards; `stack` as for
 // `coray_kdtree_intersect`; `stats` may be NULL. Every scheme but

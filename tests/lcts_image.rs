@@ -106,6 +106,146 @@ fn tiny_history_buffers_change_speed_not_results() {
     }
 }
 
+/// Images one pixel wide or high (and 2 x 2): every scheme puts each pixel
+/// exactly once, with hierarchical traversal's hit.
+#[test]
+fn thin_images_get_every_pixel_once() {
+    use coray::lcts::{cast_image_with, image_requirements as reqs};
+    let m = SceneMesh::from_nff(&spd::generate("teapot", Some(3), &Options::default()).unwrap());
+    let scene = m.scene();
+    let params = KdParams::paper();
+    let (req, mut b) = ideal_storage(&scene, &params);
+    let tree = build_with(&scene, &params, &req, &mut b);
+    for (w, h) in [(61, 1), (1, 47), (1, 1), (2, 2), (7, 2), (2, 9)] {
+        let mut cam = m.camera;
+        cam.width = w;
+        cam.height = h;
+        let (t0, p0, _) = cast(&tree, &cam, Scheme::Hierarchical, 64);
+        for scheme in SCHEMES {
+            let n = (w * h) as usize;
+            let (mut t, mut p, mut seen) = (vec![f32::NAN; n], vec![0u32; n], vec![0u32; n]);
+            let mut room = coray::owned::OwnedCast::new(&reqs(w, h, scheme, 64));
+            cast_image_with(&tree, &cam, scheme, room.scratch(), |x, y, hit| {
+                let k = (y * w + x) as usize;
+                t[k] = hit.t;
+                p[k] = global_prim(tree.scene(), hit);
+                seen[k] += 1;
+            })
+            .unwrap();
+            assert!(
+                seen.iter().all(|&c| c == 1),
+                "{w} x {h} {scheme:?}: {seen:?}"
+            );
+            assert_eq!(p, p0, "{w} x {h} {scheme:?}");
+            assert!(t.iter().zip(&t0).all(|(a, b)| a.to_bits() == b.to_bits()));
+        }
+    }
+}
+
+/// Tiles of an image, cast each on its own (uneven tiles, a one-pixel
+/// column among them), give every pixel the whole image's hit bit for bit,
+/// by every scheme, and each tile's pixels exactly once; rectangles that
+/// are empty or leave the image are refused.
+#[test]
+fn tiles_cast_alone_give_the_whole_images_pixels() {
+    use coray::lcts::{cast_rect_with_by, window::Baseline, PixelRect};
+    let m = SceneMesh::from_nff(&spd::generate("teapot", Some(3), &Options::default()).unwrap());
+    let scene = m.scene();
+    let mut cam = m.camera;
+    cam.width = 61;
+    cam.height = 47;
+    let params = KdParams::paper();
+    let (req, mut b) = ideal_storage(&scene, &params);
+    let tree = build_with(&scene, &params, &req, &mut b);
+    let (t0, p0, _) = cast(&tree, &cam, Scheme::Hierarchical, 64);
+    assert!(p0.iter().filter(|&&p| p != u32::MAX).count() > 300);
+    let (xs, ys) = ([0u32, 1, 23, 61], [0u32, 17, 18, 47]);
+    for scheme in std::iter::once(Scheme::Hierarchical).chain(SCHEMES) {
+        let n = (cam.width * cam.height) as usize;
+        let (mut t, mut p, mut seen) = (vec![f32::NAN; n], vec![0u32; n], vec![0u32; n]);
+        for j in 0..3 {
+            for i in 0..3 {
+                let rect = PixelRect {
+                    x: xs[i],
+                    y: ys[j],
+                    width: xs[i + 1] - xs[i],
+                    height: ys[j + 1] - ys[j],
+                };
+                let r = image_requirements(rect.width, rect.height, scheme, 64);
+                let mut room = coray::owned::OwnedCast::new(&r);
+                cast_rect_with_by(
+                    Baseline,
+                    &tree,
+                    &cam,
+                    rect,
+                    scheme,
+                    room.scratch(),
+                    |x, y, h| {
+                        assert!(x >= rect.x && x < rect.x + rect.width, "{scheme:?} x {x}");
+                        assert!(y >= rect.y && y < rect.y + rect.height, "{scheme:?} y {y}");
+                        let k = (y * cam.width + x) as usize;
+                        t[k] = h.t;
+                        p[k] = global_prim(tree.scene(), h);
+                        seen[k] += 1;
+                    },
+                )
+                .unwrap();
+            }
+        }
+        assert!(
+            seen.iter().all(|&c| c == 1),
+            "{scheme:?}: a pixel not put once"
+        );
+        assert_eq!(p, p0, "{scheme:?}");
+        assert!(
+            t.iter().zip(&t0).all(|(a, b)| a.to_bits() == b.to_bits()),
+            "{scheme:?}"
+        );
+    }
+    let r = image_requirements(61, 47, Scheme::Hierarchical, 64);
+    for bad in [
+        PixelRect {
+            x: 0,
+            y: 0,
+            width: 0,
+            height: 5,
+        },
+        PixelRect {
+            x: 60,
+            y: 0,
+            width: 2,
+            height: 5,
+        },
+        PixelRect {
+            x: 0,
+            y: 40,
+            width: 5,
+            height: 8,
+        },
+        PixelRect {
+            x: u32::MAX,
+            y: 0,
+            width: 2,
+            height: 1,
+        },
+    ] {
+        let mut room = coray::owned::OwnedCast::new(&r);
+        let got = cast_rect_with_by(
+            Baseline,
+            &tree,
+            &cam,
+            bad,
+            Scheme::Hierarchical,
+            room.scratch(),
+            |_, _, _| panic!("{bad:?}: a pixel put"),
+        );
+        assert!(
+            matches!(got, Err(coray::Error::InvalidParameter { .. })),
+            "{bad:?}: {got:?}"
+        );
+    }
+}
+
 /// The root-to-leaf path point location takes for `p` (going left on a tie
 /// when the direction points left, as the traversals do).
 fn locate_path(tree: &coray::kd::KdTree, p: coray::Vec3, d: coray::Vec3) -> Vec<u32> {

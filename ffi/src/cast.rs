@@ -8,7 +8,7 @@ use crate::kdtree::{open, CORAY_KDTREE_STACK_BYTES};
 use crate::{guard, CorayKdTree, CorayStatus};
 use coray::kd::{KdStackItem, KD_STACK_LEN};
 use coray::lcts::layout::{ImageScratchLayout, PatchScratchLayout};
-use coray::lcts::{self, patch, ImageScratch, Scheme};
+use coray::lcts::{self, patch, ImageScratch, PixelRect, Scheme};
 use coray::limits::MAX_HISTORY_CAPACITY;
 use coray::{Camera, Vec3};
 use core::ffi::c_void;
@@ -68,6 +68,20 @@ pub struct CorayCastParams {
     /// Records kept per traversal history (1 to 2^20): larger shares more,
     /// never changes results.
     pub history_capacity: u32,
+    /// The pixels to cast (since 1.6): columns `rect_x` to `rect_x +
+    /// rect_width - 1` and rows `rect_y` to `rect_y + rect_height - 1` of
+    /// the camera's image, which must hold them; `hits` then holds
+    /// `rect_width * rect_height` answers, row by row. Each pixel gets what
+    /// the whole image's cast gives it, so threads may cast an image's tiles
+    /// at once, each with its own scratch, stack and hits. All four 0 (the
+    /// default, and a struct from before 1.6): the whole image.
+    pub rect_x: u32,
+    /// See `rect_x`.
+    pub rect_y: u32,
+    /// See `rect_x`.
+    pub rect_width: u32,
+    /// See `rect_x`.
+    pub rect_height: u32,
 }
 
 /// Result of a patch-to-patch visibility query.
@@ -90,7 +104,8 @@ unsafe impl Versioned for CorayCamera {
     const SIZE_1_0: usize = size_of::<Self>();
 }
 unsafe impl Versioned for CorayCastParams {
-    const SIZE_1_0: usize = size_of::<Self>();
+    // 1.0 ended at `history_capacity` (a size_t and four u32s: no padding).
+    const SIZE_1_0: usize = core::mem::offset_of!(CorayCastParams, rect_x);
 }
 unsafe impl Versioned for CorayPatchResult {
     const SIZE_1_0: usize = size_of::<Self>();
@@ -132,6 +147,7 @@ pub extern "C" fn coray_cast_params_default() -> CorayCastParams {
         window_width: 5,
         window_height: 5,
         history_capacity: 256,
+        ..Default::default()
     }
 }
 
@@ -172,9 +188,29 @@ fn scheme(p: &CorayCastParams) -> Result<(Scheme, usize), CorayStatus> {
     Ok((s, p.history_capacity as usize))
 }
 
+/// The pixels `p` names of `cam`'s image: its rectangle, or the whole
+/// image when all four fields are 0; `InvalidParameter` for an empty one or
+/// one that leaves the image.
+fn pixels(cam: &Camera, p: &CorayCastParams) -> Result<PixelRect, CorayStatus> {
+    let rect = PixelRect {
+        x: p.rect_x,
+        y: p.rect_y,
+        width: p.rect_width,
+        height: p.rect_height,
+    };
+    if rect == PixelRect::default() {
+        return Ok(PixelRect::whole(cam));
+    }
+    if rect.fits(cam) {
+        Ok(rect)
+    } else {
+        Err(CorayStatus::InvalidParameter)
+    }
+}
+
 /// The cast's scratch (without its stack, which is a separate argument).
-fn layout(cam: &Camera, s: Scheme, cap: usize) -> Result<ImageScratchLayout, CorayStatus> {
-    let req = lcts::image_requirements(cam.width, cam.height, s, cap);
+fn layout(rect: &PixelRect, s: Scheme, cap: usize) -> Result<ImageScratchLayout, CorayStatus> {
+    let req = lcts::image_requirements(rect.width, rect.height, s, cap);
     ImageScratchLayout::of(&lcts::ImageRequirements { stack: 0, ..req })
         .ok_or(CorayStatus::InvalidParameter)
 }
@@ -193,14 +229,15 @@ pub unsafe extern "C" fn coray_kdtree_cast_requirements(
     guard(|| {
         let mut regions = Regions::new();
         // SAFETY: the caller passes valid pointers or NULL.
-        let (c, p, out) = unsafe {
+        let (c, params, out) = unsafe {
             (
                 camera(&carve::read(camera_in)?)?,
-                scheme(&carve::read(params)?)?,
+                carve::read(params)?,
                 Out::new(out, false, &mut regions)?,
             )
         };
-        let bytes = layout(&c, p.0, p.1)?.total_bytes;
+        let (s, cap) = scheme(&params)?;
+        let bytes = layout(&pixels(&c, &params)?, s, cap)?.total_bytes;
         out.write(CorayRequirements {
             struct_size: 0,
             arena_min_bytes: 0,
@@ -213,9 +250,11 @@ pub unsafe extern "C" fn coray_kdtree_cast_requirements(
     })
 }
 
-/// Casts one primary ray per pixel of the camera through the tree with the
-/// scheme of `params`: `hits[y * width + x]` receives the closest hit of
-/// pixel (x, y), exactly what hierarchical traversal gives (every scheme).
+/// Casts one primary ray per pixel of the camera (or of the rectangle of
+/// `params`) through the tree with the scheme of `params`: `hits[y * width
+/// + x]` receives the closest hit of pixel (x, y) (of the rectangle's
+/// pixel (x, y): `hits[y * rect_width + x]`), exactly what hierarchical
+/// traversal gives (every scheme).
 /// `scratch` (16-byte aligned, the requirements' `scratch_bytes`; NULL
 /// when that is 0) is free again afterwards; `stack` as for
 /// `coray_kdtree_intersect`; `stats` may be NULL. Every scheme but
@@ -240,15 +279,17 @@ pub unsafe extern "C" fn coray_kdtree_cast_image(
     guard(|| {
         let mut regions = Regions::new();
         // SAFETY: forwarded caller contract for every pointer.
-        let (t, c, (s, cap)) = unsafe {
+        let (t, c, params) = unsafe {
             (
                 open(tree, &mut regions)?,
                 camera(&carve::read(camera_in)?)?,
-                scheme(&carve::read(params)?)?,
+                carve::read(params)?,
             )
         };
-        let pixels = c.width as usize * c.height as usize;
-        let l = layout(&c, s, cap)?;
+        let (s, cap) = scheme(&params)?;
+        let rect = pixels(&c, &params)?;
+        let count = rect.width as usize * rect.height as usize;
+        let l = layout(&rect, s, cap)?;
         let base = scratch.cast::<u8>();
         if l.total_bytes > 0 {
             check_arena(base)?;
@@ -257,10 +298,10 @@ pub unsafe extern "C" fn coray_kdtree_cast_image(
             }
             regions.add(base, l.total_bytes, true);
         }
-        // SAFETY: forwarded caller contract: width * height writable hits,
-        // a writable stack, NULL or a writable stats struct.
+        // SAFETY: forwarded caller contract: a hit for each pixel cast
+        // writable, a writable stack, NULL or a writable stats struct.
         let (out, stk, stats) = unsafe {
-            let out = carve::output(hits, pixels)?;
+            let out = carve::output(hits, count)?;
             regions.add(out.as_ptr(), size_of_val(out), true);
             (
                 out,
@@ -290,9 +331,9 @@ pub unsafe extern "C" fn coray_kdtree_cast_image(
                 stack: stk,
             }
         };
-        let w = c.width as usize;
-        let st = crate::simd::cast_image_with(&t, &c, s, sc, |x, y, h| {
-            out[y as usize * w + x as usize] = (*h).into();
+        let w = rect.width as usize;
+        let st = crate::simd::cast_rect_with(&t, &c, rect, s, sc, |x, y, h| {
+            out[(y - rect.y) as usize * w + (x - rect.x) as usize] = (*h).into();
         })?;
         if st.trace.faults > 0 {
             return Err(CorayStatus::CorruptArena);

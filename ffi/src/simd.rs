@@ -11,7 +11,7 @@
 use coray::kd::{KdStackItem, KdTree};
 use coray::lcts::guide::Paths;
 use coray::lcts::window::{self, Baseline, Kernel, Shaft};
-use coray::lcts::{CastStats, ImageScratch, Scheme};
+use coray::lcts::{CastStats, ImageScratch, PixelRect, Scheme};
 use coray::{Camera, Error, Hit, Ray, TraceStats};
 
 /// Whether this CPU runs the AVX2 kernels and the environment lets them
@@ -151,6 +151,22 @@ pub fn cast_image_with(
     match Avx2Windows::detect() {
         Some(k) => coray::lcts::cast_image_with_by(k, tree, camera, scheme, scratch, put),
         None => coray::lcts::cast_image_with_by(Baseline, tree, camera, scheme, scratch, put),
+    }
+}
+
+/// [`coray::lcts::cast_rect_with_by`] with the widest window kernel this
+/// CPU runs (chosen once, before the cast).
+pub fn cast_rect_with(
+    tree: &KdTree,
+    camera: &Camera,
+    rect: PixelRect,
+    scheme: Scheme,
+    scratch: ImageScratch,
+    put: impl FnMut(u32, u32, &Hit),
+) -> Result<CastStats, Error> {
+    match Avx2Windows::detect() {
+        Some(k) => coray::lcts::cast_rect_with_by(k, tree, camera, rect, scheme, scratch, put),
+        None => coray::lcts::cast_rect_with_by(Baseline, tree, camera, rect, scheme, scratch, put),
     }
 }
 

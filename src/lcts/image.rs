@@ -237,6 +237,43 @@ fn bisection_levels(width: u32, height: u32, scheme: Scheme) -> Option<usize> {
     }
 }
 
+/// A rectangle of a camera's pixels: columns `x .. x + width`, rows
+/// `y .. y + height`. A cast of a rectangle gives each of its pixels what
+/// the cast of the whole image gives it, so threads may cast an image's
+/// tiles, each into its own buffer ([`cast_rect_with_by`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PixelRect {
+    /// First column.
+    pub x: u32,
+    /// First row.
+    pub y: u32,
+    /// Columns.
+    pub width: u32,
+    /// Rows.
+    pub height: u32,
+}
+
+impl PixelRect {
+    /// The camera's whole image.
+    pub fn whole(camera: &Camera) -> PixelRect {
+        PixelRect {
+            x: 0,
+            y: 0,
+            width: camera.width,
+            height: camera.height,
+        }
+    }
+
+    /// Whether it holds a pixel and lies inside the camera's image.
+    pub fn fits(&self, camera: &Camera) -> bool {
+        let inside = |at: u32, len: u32, side: u32| at.checked_add(len).is_some_and(|e| e <= side);
+        self.width > 0
+            && self.height > 0
+            && inside(self.x, self.width, camera.width)
+            && inside(self.y, self.height, camera.height)
+    }
+}
+
 /// Casts the camera's image: `hits[y * width + x]` receives the closest
 /// hit of pixel (x, y), exactly what hierarchical traversal gives it.
 /// `hits` holds `width * height` entries; the scratch meets
@@ -299,17 +336,49 @@ pub fn cast_image_with_by<K: Kernel>(
     camera: &Camera,
     scheme: Scheme,
     scratch: ImageScratch,
-    mut put: impl FnMut(u32, u32, &Hit),
+    put: impl FnMut(u32, u32, &Hit),
 ) -> Result<CastStats, Error> {
-    let (w, h) = (camera.width, camera.height);
     if scheme.needs_ropes() && !tree.info().has_ropes() {
         return Err(Error::NoRopes);
     }
-    if w == 0 || h == 0 {
+    if camera.width == 0 || camera.height == 0 {
         return Err(Error::InvalidParameter {
             name: "camera resolution",
         });
     }
+    let whole = PixelRect::whole(camera);
+    cast_rect_with_by(kernel, tree, camera, whole, scheme, scratch, put)
+}
+
+/// [`cast_image_with_by`] over the pixels of `rect` alone (inside the
+/// camera's image, not empty): `put(x, y, hit)` once for each, `x` and
+/// `y` the camera's pixel coordinates; the scratch meets
+/// [`image_requirements`] for the rectangle's width and height. Each pixel
+/// gets exactly what the whole image's cast gives it (every scheme is
+/// exact), whatever the rectangle; the LCTS schemes lay their windows out
+/// from its corner.
+pub fn cast_rect_with_by<K: Kernel>(
+    kernel: K,
+    tree: &KdTree,
+    camera: &Camera,
+    rect: PixelRect,
+    scheme: Scheme,
+    scratch: ImageScratch,
+    mut put: impl FnMut(u32, u32, &Hit),
+) -> Result<CastStats, Error> {
+    if scheme.needs_ropes() && !tree.info().has_ropes() {
+        return Err(Error::NoRopes);
+    }
+    if !rect.fits(camera) {
+        return Err(Error::InvalidParameter {
+            name: "pixel rectangle",
+        });
+    }
+    // The cast works in the rectangle's own coordinates; rays and `put`
+    // take the camera's.
+    let (w, h) = (rect.width, rect.height);
+    let origin = [rect.x, rect.y];
+    let mut put = |x: u32, y: u32, hit: &Hit| put(origin[0] + x, origin[1] + y, hit);
     if scratch.stack.len() < KD_STACK_LEN {
         return Err(Error::SliceTooSmall {
             slice: "stack",
@@ -318,7 +387,10 @@ pub fn cast_image_with_by<K: Kernel>(
         });
     }
     let (f, r, u) = camera.basis();
-    let ray = |x: u32, y: u32| camera.ray_in(f, r, u, x as f32 + 0.5, y as f32 + 0.5);
+    let ray = |x: u32, y: u32| {
+        let (x, y) = (origin[0] + x, origin[1] + y);
+        camera.ray_in(f, r, u, x as f32 + 0.5, y as f32 + 0.5)
+    };
     let mut st = CastStats::default();
     let stack = &mut *scratch.stack;
     match scheme {
@@ -363,7 +435,7 @@ pub fn cast_image_with_by<K: Kernel>(
             }
         }
         Scheme::Hlcts1d | Scheme::Hlcts2d => {
-            return cast_bisection(kernel, tree, camera, scheme, scratch, &mut put);
+            return cast_bisection(kernel, tree, camera, rect, scheme, scratch, &mut put);
         }
         Scheme::Slcts1d { n } | Scheme::Slcts2d { n, .. } => {
             if n < 2 {
@@ -377,6 +449,10 @@ pub fn cast_image_with_by<K: Kernel>(
                         name: "window height",
                     })
                 }
+                // An image one pixel wide or high has no 2D window: its
+                // scanlines are cast as SLCTS-1D casts them (each pixel of a
+                // one-pixel-wide image is a corner).
+                Scheme::Slcts2d { .. } if w < 2 || h < 2 => 1,
                 Scheme::Slcts2d { m, .. } => m,
                 _ => 1,
             };
@@ -408,7 +484,7 @@ pub fn cast_image_with_by<K: Kernel>(
             let (seq_buf, path_buf) = scratch
                 .entries
                 .split_at_mut(scratch.entries.len() / (1 + CORNERS));
-            let screen = ScreenBox::new(camera, (f, r, u), &tree.trace_box);
+            let screen = ScreenBox::new(camera, (f, r, u), &tree.trace_box, origin);
             let mut hist_lens_top = HistRow { info: ct };
             let mut hist_lens_bottom = HistRow { info: cb };
             let corner_rows = if m == 1 {
@@ -544,10 +620,17 @@ struct ScreenBox {
     hi: [f32; 2],
     /// `2 / width`, `2 / height`: pixel to `sx`, `sy` as `ray_in` maps.
     per_pixel: [f32; 2],
+    /// The camera's pixel that the cast's pixel (0, 0) is.
+    origin: [u32; 2],
 }
 
 impl ScreenBox {
-    fn new(camera: &Camera, (f, r, u): (Vec3, Vec3, Vec3), bx: &Aabb) -> Option<ScreenBox> {
+    fn new(
+        camera: &Camera,
+        (f, r, u): (Vec3, Vec3, Vec3),
+        bx: &Aabb,
+        origin: [u32; 2],
+    ) -> Option<ScreenBox> {
         let eye = camera.from;
         let (r2, u2) = (r.length_squared(), u.length_squared());
         let corners = [0, 1, 2, 3, 4, 5, 6, 7].map(|k| {
@@ -579,14 +662,15 @@ impl ScreenBox {
                 2.0 / camera.width.max(1) as f32,
                 2.0 / camera.height.max(1) as f32,
             ],
+            origin,
         })
     }
 
-    /// Whether every ray of the pixels `xs` (first, last) by `ys` misses
-    /// the box.
+    /// Whether every ray of the cast's pixels `xs` (first, last) by `ys`
+    /// misses the box.
     fn misses(&self, xs: [u32; 2], ys: [u32; 2]) -> bool {
-        let sx = |x: u32| (x as f32 + 0.5) * self.per_pixel[0] - 1.0;
-        let sy = |y: u32| 1.0 - (y as f32 + 0.5) * self.per_pixel[1];
+        let sx = |x: u32| ((self.origin[0] + x) as f32 + 0.5) * self.per_pixel[0] - 1.0;
+        let sy = |y: u32| 1.0 - ((self.origin[1] + y) as f32 + 0.5) * self.per_pixel[1];
         // sx grows with x, sy falls with y.
         let (left, right, top, bottom) = (sx(xs[0]), sx(xs[1]), sy(ys[0]), sy(ys[1]));
         right < self.lo[0] - SCREEN_MARGIN
@@ -750,6 +834,8 @@ struct Bisection<'t, 'o, K, F: FnMut(u32, u32, &Hit)> {
     tree: &'t KdTree<'t>,
     camera: &'t Camera,
     basis: (crate::Vec3, crate::Vec3, crate::Vec3),
+    /// The camera's pixel that the cast's pixel (0, 0) is.
+    origin: [u32; 2],
     /// Where the scene's box lies on the image (rectangles outside it are
     /// not traced, their rays missing it).
     screen: Option<ScreenBox>,
@@ -769,6 +855,7 @@ struct Bisection<'t, 'o, K, F: FnMut(u32, u32, &Hit)> {
 impl<K: Kernel, F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, K, F> {
     fn ray(&self, x: u32, y: u32) -> crate::Ray {
         let (f, r, u) = self.basis;
+        let (x, y) = (self.origin[0] + x, self.origin[1] + y);
         self.camera.ray_in(f, r, u, x as f32 + 0.5, y as f32 + 0.5)
     }
 
@@ -1025,11 +1112,21 @@ fn cast_bisection<K: Kernel>(
     kernel: K,
     tree: &KdTree,
     camera: &Camera,
+    rect: PixelRect,
     scheme: Scheme,
     scratch: ImageScratch,
     put: &mut impl FnMut(u32, u32, &Hit),
 ) -> Result<CastStats, Error> {
-    let (w, h) = (camera.width, camera.height);
+    let (w, h) = (rect.width, rect.height);
+    let origin = [rect.x, rect.y];
+    // An image one pixel wide or high has no rectangle to bisect (its four
+    // corners would be two pixels, each traced twice): its scanlines are
+    // cast as HLCTS-1D casts them. HLCTS-2D's scratch holds HLCTS-1D's.
+    let scheme = if w < 2 || h < 2 {
+        Scheme::Hlcts1d
+    } else {
+        scheme
+    };
     let levels = bisection_levels(w, h, scheme).unwrap_or(1);
     let slots = bisection_slots(levels);
     let cap = scratch.records.len() / slots;
@@ -1061,7 +1158,8 @@ fn cast_bisection<K: Kernel>(
         tree,
         camera,
         basis: camera.basis(),
-        screen: ScreenBox::new(camera, camera.basis(), &tree.trace_box),
+        origin,
+        screen: ScreenBox::new(camera, camera.basis(), &tree.trace_box, origin),
         cap,
         per_cut,
         leaf_pixels: LEAF_PIXELS,
@@ -1169,7 +1267,7 @@ mod tests {
                 continue;
             }
             let (f, r, u) = camera.basis();
-            let Some(screen) = ScreenBox::new(&camera, (f, r, u), &bx) else {
+            let Some(screen) = ScreenBox::new(&camera, (f, r, u), &bx, [0, 0]) else {
                 continue;
             };
             for y0 in (0..camera.height - 4).step_by(4) {
@@ -1215,11 +1313,11 @@ mod tests {
             min: Vec3::splat(-1.0),
             max: Vec3::splat(1.0),
         };
-        assert!(ScreenBox::new(&camera, camera.basis(), &bx).is_none());
+        assert!(ScreenBox::new(&camera, camera.basis(), &bx, [0, 0]).is_none());
         let ahead = Aabb {
             min: Vec3::new(-1.0, -1.0, 4.0),
             max: Vec3::new(1.0, 1.0, 6.0),
         };
-        assert!(ScreenBox::new(&camera, camera.basis(), &ahead).is_some());
+        assert!(ScreenBox::new(&camera, camera.basis(), &ahead, [0, 0]).is_some());
     }
 }

@@ -31,6 +31,6 @@ pub mod window;
 
 pub use history::{History, HistoryRecord};
 pub use image::{
-    cast_image, cast_image_by, cast_image_with, cast_image_with_by, image_requirements, CastStats,
-    CornerInfo, ImageRequirements, ImageScratch, Scheme,
+    cast_image, cast_image_by, cast_image_with, cast_image_with_by, cast_rect_with_by,
+    image_requirements, CastStats, CornerInfo, ImageRequirements, ImageScratch, PixelRect, Scheme,
 };

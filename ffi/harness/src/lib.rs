@@ -620,6 +620,15 @@ fn kd_cast(t: &CorayKdTree, inp: &mut Input, rep: &mut Report) {
     p.window_width = inp.u8() as u32 % 8;
     p.window_height = inp.u8() as u32 % 8;
     p.history_capacity = 1 + inp.u8() as u32 % 64;
+    // Half the casts a rectangle of the image (since 1.6), some of them
+    // empty or leaving it.
+    let rect = inp.u8();
+    if rect & 1 == 1 {
+        p.rect_x = inp.u8() as u32 % 14;
+        p.rect_y = inp.u8() as u32 % 14;
+        p.rect_width = inp.u8() as u32 % 14;
+        p.rect_height = inp.u8() as u32 % 14;
+    }
     let mut req = requirements();
     // SAFETY: live locals with struct_size set.
     let s = unsafe { coray_kdtree_cast_requirements(&cam, &p, &mut req) };
@@ -628,10 +637,16 @@ fn kd_cast(t: &CorayKdTree, inp: &mut Input, rep: &mut Report) {
     }
     let mut scratch = blocks(req.scratch_bytes);
     let mut stack = blocks(req.stack_bytes);
-    let mut hits = vec![CorayHit::default(); (cam.width * cam.height) as usize];
+    // The hits of the pixels cast: a rectangle's, else the image's.
+    let pixels = if p.rect_width > 0 {
+        p.rect_width * p.rect_height
+    } else {
+        cam.width * cam.height
+    };
+    let mut hits = vec![CorayHit::default(); pixels as usize];
     let mut stats = coray_trace_stats_default();
     // SAFETY: scratch, stack and hits are as large as the requirements
-    // and the camera ask.
+    // and the pixels cast ask.
     let s = unsafe {
         coray_kdtree_cast_image(
             t,
