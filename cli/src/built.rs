@@ -15,6 +15,7 @@ use std::time::Instant;
 enum Inner<'s> {
     Kd(OwnedKd, Traversal),
     KdC(coray_ffi::through_c::CKdTree<'s>, crate::method::CCalls),
+    WideC(coray_ffi::through_c::CWide<'s>, crate::method::CCalls),
     Bvh(OwnedBvh),
     Wide(OwnedWide),
     Proj(Box<ProjRig<'s>>),
@@ -107,6 +108,18 @@ impl<'s> Built<'s> {
                 b.bytes = Some(tree.arena_bytes());
                 b.inner = Inner::KdC(tree, calls);
             }
+            Method::WideC { calls } => {
+                let t = Instant::now();
+                let wide = coray_ffi::through_c::CWide::new(&scene).map_err(|s| {
+                    format!(
+                        "{method} build: {}",
+                        coray_ffi::status_description(s as i32).to_string_lossy()
+                    )
+                })?;
+                b.build_ms = ms(t);
+                b.bytes = Some(wide.arena_bytes());
+                b.inner = Inner::WideC(wide, calls);
+            }
             Method::Cast { .. } => {
                 return Err(format!(
                     "{method} casts images: use it with `coray bench`, or for the eye rays of `coray render --spd`"
@@ -161,8 +174,13 @@ impl<'s> Built<'s> {
                 method: *traversal,
                 bounds: self.bounds,
             }),
-            Inner::KdC(tree, calls) => v.visit(&crate::shoot::KdCShooter {
-                tree,
+            Inner::KdC(tree, calls) => v.visit(&crate::shoot::CShooter {
+                structure: tree,
+                calls: *calls,
+                bounds: self.bounds,
+            }),
+            Inner::WideC(wide, calls) => v.visit(&crate::shoot::CShooter {
+                structure: wide,
                 calls: *calls,
                 bounds: self.bounds,
             }),

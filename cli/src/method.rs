@@ -106,19 +106,38 @@ pub struct ProjMethod {
     pub builder_name: &'static str,
 }
 
-/// How a kd-tree traced through the C ABI gets its rays.
+/// How a structure traced through the C ABI gets its rays (names of the
+/// kd-tree's calls; the wide hierarchy's alike, `coray_wide_*`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CCalls {
     /// One `coray_kdtree_intersect` / `_occluded` call per chunk of rays
-    /// (`kd-c`).
+    /// (`kd-c`, `wide-c`).
     Arrays,
     /// One `coray_kdtree_tracer_intersect1` / `_occluded1` call per ray on a
-    /// tracer per thread (`kd-c1`): what a renderer tracing one ray at a
-    /// time should call.
+    /// tracer per thread (`kd-c1`, `wide-c1`): what a renderer tracing one
+    /// ray at a time should call.
     Tracer,
     /// One `coray_kdtree_intersect1` / `_occluded1` call per ray with the
-    /// handle and stack, checked in full on every call (`kd-c1-handle`).
+    /// handle and stack, checked in full on every call (`kd-c1-handle`,
+    /// `wide-c1-handle`).
     Handle,
+}
+
+impl CCalls {
+    /// The suffix of the method names (`kd-c1`: `-c1`).
+    fn suffix(self) -> &'static str {
+        match self {
+            CCalls::Arrays => "-c",
+            CCalls::Tracer => "-c1",
+            CCalls::Handle => "-c1-handle",
+        }
+    }
+
+    fn of_suffix(s: &str) -> Option<CCalls> {
+        [CCalls::Arrays, CCalls::Tracer, CCalls::Handle]
+            .into_iter()
+            .find(|c| c.suffix() == s)
+    }
 }
 
 /// One way of tracing rays that the command can build and time.
@@ -135,6 +154,12 @@ pub enum Method {
     /// A kd-tree built, opened and traced through the C ABI with the
     /// command's preset, hierarchically: what a C caller pays per call.
     KdC {
+        /// How the rays are handed over.
+        calls: CCalls,
+    },
+    /// The wide hierarchy built (default parameters), opened and traced
+    /// through the C ABI.
+    WideC {
         /// How the rays are handed over.
         calls: CCalls,
     },
@@ -259,7 +284,7 @@ impl Method {
     pub fn help() -> String {
         let names: Vec<String> = Method::all().iter().map(|m| m.to_string()).collect();
         format!(
-            "{}, kd-paper, kd-paper-rope, kd-paper-packet, kd-compact, kd-compact-packet, kd-c, kd-c1, kd-c1-handle, \
+            "{}, kd-paper, kd-paper-rope, kd-paper-packet, kd-compact, kd-compact-packet, kd-c, kd-c1, kd-c1-handle, wide-c, wide-c1, wide-c1-handle, \
              slcts1d:N, slcts2d:NxM, wide:N, \
              and proj-BUILDER-CRITERIA-SCHEME (BUILDER {}, CRITERIA 2d|dummy, SCHEME 2d|3d|comb)",
             names.join(", "),
@@ -288,21 +313,6 @@ impl Method {
             "kd-compact" => return kd(Some(Preset::Compact), Traversal::Hierarchical),
             "kd-compact-rope" => return kd(Some(Preset::Compact), Traversal::Ropes),
             "kd-compact-packet" => return kd(Some(Preset::Compact), Traversal::Packets),
-            "kd-c" => {
-                return Some(Method::KdC {
-                    calls: CCalls::Arrays,
-                })
-            }
-            "kd-c1" => {
-                return Some(Method::KdC {
-                    calls: CCalls::Tracer,
-                })
-            }
-            "kd-c1-handle" => {
-                return Some(Method::KdC {
-                    calls: CCalls::Handle,
-                })
-            }
             "slcts1d" => return cast(Scheme::Slcts1d { n: 5 }),
             "slcts2d" => return cast(Scheme::Slcts2d { n: 5, m: 5 }),
             "hlcts1d" => return cast(Scheme::Hlcts1d),
@@ -312,6 +322,12 @@ impl Method {
             "embree" => return Some(Method::Embree(EmbreeCall::One)),
             "embree8" => return Some(Method::Embree(EmbreeCall::Eight)),
             _ => {}
+        }
+        if let Some(calls) = s.strip_prefix("kd").and_then(CCalls::of_suffix) {
+            return Some(Method::KdC { calls });
+        }
+        if let Some(calls) = s.strip_prefix("wide").and_then(CCalls::of_suffix) {
+            return Some(Method::WideC { calls });
         }
         let window = |v: &str| v.parse::<u32>().ok().filter(|&n| (2..=1024).contains(&n));
         if let Some(n) = s.strip_prefix("slcts1d:") {
@@ -399,15 +415,8 @@ impl fmt::Display for Method {
                 };
                 write!(f, "kd{p}{t}")
             }
-            Method::KdC {
-                calls: CCalls::Arrays,
-            } => f.write_str("kd-c"),
-            Method::KdC {
-                calls: CCalls::Tracer,
-            } => f.write_str("kd-c1"),
-            Method::KdC {
-                calls: CCalls::Handle,
-            } => f.write_str("kd-c1-handle"),
+            Method::KdC { calls } => write!(f, "kd{}", calls.suffix()),
+            Method::WideC { calls } => write!(f, "wide{}", calls.suffix()),
             Method::Cast { scheme } => match scheme {
                 Scheme::Slcts1d { n: 5 } => f.write_str("slcts1d"),
                 Scheme::Slcts1d { n } => write!(f, "slcts1d:{n}"),
@@ -467,6 +476,12 @@ mod tests {
             "kd-compact-packet",
             "embree",
             "embree8",
+            "kd-c",
+            "kd-c1",
+            "kd-c1-handle",
+            "wide-c",
+            "wide-c1",
+            "wide-c1-handle",
         ] {
             all.push(Method::parse(m).unwrap());
         }
@@ -488,6 +503,8 @@ mod tests {
             "wide:0",
             "wide:65",
             "wide:",
+            "wide-c2",
+            "kd-c1-",
             "hlcts2d:4x4",
             "proj-tdbs-dummy-3d",
             "proj-x-2d-2d",

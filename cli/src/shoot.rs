@@ -6,6 +6,7 @@
 
 use crate::method::CCalls;
 use coray::{Aabb, Accel, Hit, Ray, TraceStats};
+use coray_ffi::through_c::CStructure;
 
 /// A structure rays are shot through, with the per-thread state its
 /// traversal needs (its stack).
@@ -185,43 +186,43 @@ impl Shooter for KdPacketShooter<'_> {
     }
 }
 
-/// A kd-tree traced through the C ABI: one call per ray (on a tracer per
-/// thread, or with the handle and stack), or one array call per chunk of
-/// rays (the harness's chunks). Statistics stay 0: the calls get NULL for
-/// them, as a renderer's would.
-pub struct KdCShooter<'a, 's> {
-    /// The opened tree.
-    pub tree: &'a coray_ffi::through_c::CKdTree<'s>,
+/// A kd-tree or the wide hierarchy traced through the C ABI: one call per
+/// ray (on a tracer per thread, or with the handle and stack), or one
+/// array call per chunk of rays (the harness's chunks). Statistics stay 0:
+/// the calls get NULL for them, as a renderer's would.
+pub struct CShooter<'a, T> {
+    /// The opened structure.
+    pub structure: &'a T,
     /// How the rays are handed over.
     pub calls: CCalls,
     /// Its scene's box.
     pub bounds: Aabb,
 }
 
-/// One thread's state for [`KdCShooter`]: a traversal stack, the any-hit
-/// answers as bytes, and the thread's tracer (for `kd-c1`).
-pub struct KdCCtx<'a> {
-    stack: coray_ffi::through_c::CStack,
+/// One thread's state for [`CShooter`]: a traversal stack, the any-hit
+/// answers as bytes, and the thread's tracer (for `kd-c1`, `wide-c1`).
+pub struct CCtx<'a, S, F> {
+    stack: S,
     bytes: Vec<u8>,
-    tracer: Option<coray_ffi::through_c::CTracer<'a>>,
+    tracer: Option<coray_ffi::through_c::CTracer<'a, F>>,
 }
 
-impl<'a> Shooter for KdCShooter<'a, '_> {
-    type Ctx = KdCCtx<'a>;
+impl<'a, T: CStructure + Sync> Shooter for CShooter<'a, T> {
+    type Ctx = CCtx<'a, T::Stack, T::Calls>;
 
     fn ctx(&self) -> Self::Ctx {
-        let tree: &'a coray_ffi::through_c::CKdTree = self.tree;
-        KdCCtx {
-            stack: Default::default(),
+        let s: &'a T = self.structure;
+        CCtx {
+            stack: s.new_stack(),
             bytes: Vec::new(),
-            tracer: (self.calls == CCalls::Tracer).then(|| tree.tracer().expect("valid tracer")),
+            tracer: (self.calls == CCalls::Tracer).then(|| s.new_tracer().expect("valid tracer")),
         }
     }
 
     fn intersect(&self, ray: &Ray, ctx: &mut Self::Ctx, _: &mut TraceStats) -> Hit {
         match &mut ctx.tracer {
             Some(t) => t.intersect1(ray),
-            None => self.tree.intersect1(ray, &mut ctx.stack),
+            None => self.structure.intersect_one(ray, &mut ctx.stack),
         }
         .expect("valid call")
     }
@@ -235,7 +236,7 @@ impl<'a> Shooter for KdCShooter<'a, '_> {
     ) -> bool {
         match &mut ctx.tracer {
             Some(t) => t.occluded1(ray),
-            None => self.tree.occluded1(ray, &mut ctx.stack),
+            None => self.structure.occluded_one(ray, &mut ctx.stack),
         }
         .expect("valid call")
     }
@@ -248,8 +249,8 @@ impl<'a> Shooter for KdCShooter<'a, '_> {
         st: &mut TraceStats,
     ) {
         if self.calls == CCalls::Arrays {
-            self.tree
-                .intersect(rays, out, &mut ctx.stack)
+            self.structure
+                .intersect_all(rays, out, &mut ctx.stack)
                 .expect("valid call");
         } else {
             for (r, h) in rays.iter().zip(out.iter_mut()) {
@@ -268,8 +269,8 @@ impl<'a> Shooter for KdCShooter<'a, '_> {
     ) {
         if self.calls == CCalls::Arrays {
             ctx.bytes.resize(rays.len(), 0);
-            self.tree
-                .occluded(rays, &mut ctx.bytes, &mut ctx.stack)
+            self.structure
+                .occluded_all(rays, &mut ctx.bytes, &mut ctx.stack)
                 .expect("valid call");
             for (o, b) in out.iter_mut().zip(&ctx.bytes) {
                 *o = *b != 0;

@@ -770,7 +770,8 @@ fn build_table_has_every_builder() {
 }
 
 /// The speed table traces every set with every method, the C-ABI rows
-/// (`kd-c` array calls, `kd-c1` one call per ray) among them, and every
+/// (`kd-c` array calls, `kd-c1` and `wide-c1` one call per ray) among
+/// them, and every
 /// coray method answers exactly as the hierarchical kd-tree.
 #[test]
 fn speed_table_has_the_c_abi_rows_and_no_mismatch() {
@@ -801,7 +802,7 @@ fn speed_table_has_the_c_abi_rows_and_no_mismatch() {
     }
     for r in rows {
         let cells = r["cells"].as_array().unwrap();
-        for m in ["kd", "kd-c", "kd-c1"] {
+        for m in ["kd", "kd-c", "kd-c1", "wide-c1"] {
             let c = cells.iter().find(|c| c["method"] == m).expect(m);
             assert!(c["mrays"].as_f64().unwrap() > 0.0, "{c}");
         }

@@ -1,11 +1,13 @@
-//! A kd-tree built, opened and traced through the C entry points, for Rust
-//! code that must pay exactly what a C caller pays per call: `coray bench`
-//! times `kd-c` (one `coray_kdtree_intersect` / `_occluded` call per array
-//! of rays) against `kd-c1` (one `coray_kdtree_tracer_intersect1` / `_occluded1`
-//! call per ray on a tracer per thread) and `kd-c1-handle` (one
-//! `coray_kdtree_intersect1` / `_occluded1` call per ray with the handle
-//! and stack) with it. Safe to use: it owns the arena and the handle and
-//! hands the entry points only pointers it made from live borrows.
+//! A kd-tree and a wide hierarchy built, opened and traced through the C
+//! entry points, for Rust code that must pay exactly what a C caller pays
+//! per call: `coray bench` times `kd-c` (one `coray_kdtree_intersect` /
+//! `_occluded` call per array of rays) against `kd-c1` (one
+//! `coray_kdtree_tracer_intersect1` / `_occluded1` call per ray on a tracer
+//! per thread) and `kd-c1-handle` (one `coray_kdtree_intersect1` /
+//! `_occluded1` call per ray with the handle and stack) with it, and
+//! `wide-c` / `wide-c1` alike on the wide hierarchy. Safe to use: each
+//! owns its arena and handle and hands the entry points only pointers it
+//! made from live borrows.
 
 use crate::saved::{build_arena, c_scene};
 use crate::*;
@@ -25,26 +27,90 @@ pub struct CKdTree<'s> {
     _scene: PhantomData<&'s Scene<'s>>,
 }
 
-/// One thread's tracer on a [`CKdTree`] (`coray_kdtree_tracer`) with its
-/// own stack: `coray_kdtree_tracer_intersect1` / `_occluded1` per ray. Both live
-/// on the heap, so that moving this value moves neither (a tracer's
-/// address is part of its check).
-pub struct CTracer<'t> {
-    tracer: std::boxed::Box<CorayTracer>,
-    _stack: CStack,
-    _tree: PhantomData<&'t CorayKdTree>,
+/// A family's one-ray calls on its tracers, called directly (as a C
+/// caller calls them).
+pub trait TracerCalls {
+    /// `coray_<family>_tracer_intersect1`.
+    ///
+    /// # Safety
+    /// As that entry point.
+    unsafe fn intersect1(t: *mut CorayTracer, r: *const CorayRay, h: *mut CorayHit) -> CorayStatus;
+    /// `coray_<family>_tracer_occluded1`.
+    ///
+    /// # Safety
+    /// As that entry point.
+    unsafe fn occluded1(t: *mut CorayTracer, r: *const CorayRay, o: *mut u8) -> CorayStatus;
 }
 
-impl CTracer<'_> {
-    /// The closest hit of `ray` by one `coray_kdtree_tracer_intersect1` call.
+/// The kd-tree's tracer calls.
+pub struct KdCalls;
+
+impl TracerCalls for KdCalls {
+    #[inline(always)]
+    unsafe fn intersect1(t: *mut CorayTracer, r: *const CorayRay, h: *mut CorayHit) -> CorayStatus {
+        // SAFETY: forwarded contract.
+        unsafe { coray_kdtree_tracer_intersect1(t, r, h) }
+    }
+    #[inline(always)]
+    unsafe fn occluded1(t: *mut CorayTracer, r: *const CorayRay, o: *mut u8) -> CorayStatus {
+        // SAFETY: forwarded contract.
+        unsafe { coray_kdtree_tracer_occluded1(t, r, o) }
+    }
+}
+
+/// The wide hierarchy's tracer calls.
+pub struct WideCalls;
+
+impl TracerCalls for WideCalls {
+    #[inline(always)]
+    unsafe fn intersect1(t: *mut CorayTracer, r: *const CorayRay, h: *mut CorayHit) -> CorayStatus {
+        // SAFETY: forwarded contract.
+        unsafe { coray_wide_tracer_intersect1(t, r, h) }
+    }
+    #[inline(always)]
+    unsafe fn occluded1(t: *mut CorayTracer, r: *const CorayRay, o: *mut u8) -> CorayStatus {
+        // SAFETY: forwarded contract.
+        unsafe { coray_wide_tracer_occluded1(t, r, o) }
+    }
+}
+
+/// One thread's tracer on a [`CKdTree`] (`coray_kdtree_tracer`) or a
+/// [`CWide`] (`coray_wide_tracer`) with its own stack: the family's
+/// (`F`) `_tracer_intersect1` / `_occluded1` per ray. Both live on the
+/// heap, so that moving this value moves neither (a tracer's address is
+/// part of its check).
+pub struct CTracer<'t, F> {
+    tracer: std::boxed::Box<CorayTracer>,
+    _stack: Vec<u128>,
+    _structure: PhantomData<(&'t (), F)>,
+}
+
+impl<F: TracerCalls> CTracer<'_, F> {
+    /// Makes a tracer with `make` (given the stack and its bytes, and the
+    /// tracer to fill).
+    fn new(
+        stack_bytes: usize,
+        make: impl FnOnce(*mut u128, usize, &mut CorayTracer) -> CorayStatus,
+    ) -> Result<Self, CorayStatus> {
+        let mut t = CTracer {
+            tracer: std::boxed::Box::new(CorayTracer { opaque: [0; 32] }),
+            _stack: std::vec![0u128; stack_bytes.div_ceil(16)],
+            _structure: PhantomData,
+        };
+        let s = make(t._stack.as_mut_ptr(), stack_bytes, &mut t.tracer);
+        status(s).map(|()| t)
+    }
+
+    /// The closest hit of `ray` by one `_tracer_intersect1` call.
     pub fn intersect1(&mut self, ray: &Ray) -> Result<Hit, CorayStatus> {
         let mut hit = core::mem::MaybeUninit::<Hit>::uninit();
-        // SAFETY: the tracer was made on a tree borrowed for 't (its
-        // handle, arena and scene in place) with the stack owned here; Ray
-        // and CorayRay, Hit and CorayHit share their layout (abi.rs); the
-        // hit is a local, written whole when the call succeeds.
+        // SAFETY: the tracer was made on a structure borrowed for 't (its
+        // handle, arena and scene in place) with the stack owned here, by
+        // the family whose call this is; Ray and CorayRay, Hit and
+        // CorayHit share their layout (abi.rs); the hit is a local, written
+        // whole when the call succeeds.
         let s = unsafe {
-            coray_kdtree_tracer_intersect1(
+            F::intersect1(
                 &mut *self.tracer,
                 (ray as *const Ray).cast(),
                 hit.as_mut_ptr().cast(),
@@ -54,13 +120,11 @@ impl CTracer<'_> {
         status(s).map(|()| unsafe { hit.assume_init() })
     }
 
-    /// Whether something blocks `ray`, by one `coray_kdtree_tracer_occluded1` call.
+    /// Whether something blocks `ray`, by one `_tracer_occluded1` call.
     pub fn occluded1(&mut self, ray: &Ray) -> Result<bool, CorayStatus> {
         let mut o = 0u8;
         // SAFETY: as in `intersect1`, with one byte.
-        let s = unsafe {
-            coray_kdtree_tracer_occluded1(&mut *self.tracer, (ray as *const Ray).cast(), &mut o)
-        };
+        let s = unsafe { F::occluded1(&mut *self.tracer, (ray as *const Ray).cast(), &mut o) };
         status(s).map(|()| o != 0)
     }
 
@@ -115,25 +179,16 @@ impl<'s> CKdTree<'s> {
     }
 
     /// A tracer on this tree by its traversal, with a stack of its own.
-    pub fn tracer(&self) -> Result<CTracer<'_>, CorayStatus> {
-        let mut t = CTracer {
-            tracer: std::boxed::Box::new(CorayTracer { opaque: [0; 32] }),
-            _stack: CStack::default(),
-            _tree: PhantomData,
-        };
-        // SAFETY: the handle is this tree's (its arena and scene alive for
-        // the borrow the tracer keeps); the stack is 16-byte aligned and
-        // as long as passed; the tracer is a live heap value.
-        let s = unsafe {
-            coray_kdtree_tracer(
-                &self.handle,
-                self.traversal,
-                t._stack.0.as_mut_ptr().cast(),
-                CORAY_KDTREE_STACK_BYTES,
-                &mut *t.tracer,
-            )
-        };
-        status(s).map(|()| t)
+    pub fn tracer(&self) -> Result<CTracer<'_, KdCalls>, CorayStatus> {
+        CTracer::new(CORAY_KDTREE_STACK_BYTES, |stack, bytes, tracer| {
+            // SAFETY: the handle is this tree's (its arena and scene
+            // alive for the borrow the tracer keeps); the stack is
+            // 16-byte aligned and as long as passed; the tracer is a
+            // live heap value.
+            unsafe {
+                coray_kdtree_tracer(&self.handle, self.traversal, stack.cast(), bytes, tracer)
+            }
+        })
     }
 
     /// The arena's bytes.
@@ -231,6 +286,267 @@ impl<'s> CKdTree<'s> {
     }
 }
 
+/// A wide hierarchy in a C arena (`coray_wide_build`, default
+/// parameters), opened: its handle points into the arena and into the
+/// scene's arrays, which `'s` keeps alive and unchanged.
+pub struct CWide<'s> {
+    /// The arena (its heap buffer never moves while the hierarchy lives).
+    _arena: Vec<u128>,
+    handle: CorayWide,
+    /// Bytes of the arena the hierarchy uses (`arena_bytes_used`).
+    arena_bytes: usize,
+    /// Stack bytes a trace call needs (`CorayWideInfo::stack_bytes`).
+    stack_bytes: usize,
+    _scene: PhantomData<&'s Scene<'s>>,
+}
+
+impl<'s> CWide<'s> {
+    /// Builds the hierarchy on `scene` with `coray_wide_params_default()`
+    /// and opens it.
+    pub fn new(scene: &Scene<'s>) -> Result<CWide<'s>, CorayStatus> {
+        let params = coray_wide_params_default();
+        let c = c_scene(scene);
+        let mut req = coray_requirements_default();
+        // SAFETY: params and req are live locals with struct_size set.
+        status(unsafe { coray_wide_requirements(scene.prim_count(), &params, &mut req) })?;
+        let mut arena = std::vec![0u128; req.arena_bytes.div_ceil(16)];
+        let mut scratch = std::vec![0u128; req.scratch_bytes.div_ceil(16)];
+        // SAFETY: c's arrays are `scene`'s, live for the call; arena and
+        // scratch are 16-byte aligned and at least as long as passed.
+        status(unsafe {
+            coray_wide_build(
+                &c,
+                &params,
+                arena.as_mut_ptr().cast(),
+                req.arena_bytes,
+                scratch.as_mut_ptr().cast(),
+                req.scratch_bytes,
+                core::ptr::null_mut(),
+            )
+        })?;
+        let mut handle = CorayWide { opaque: [0; 32] };
+        // SAFETY: the arena was just built and is kept with the handle; c
+        // points to `scene`'s arrays, which outlive 's; handle is a local.
+        status(unsafe {
+            coray_wide_open(arena.as_ptr().cast(), req.arena_bytes, &c, &mut handle)
+        })?;
+        let mut info = coray_wide_info_default();
+        // SAFETY: the handle was just opened; info is a local, size set.
+        status(unsafe { coray_wide_info(&handle, &mut info) })?;
+        Ok(CWide {
+            _arena: arena,
+            handle,
+            arena_bytes: info.arena_bytes_used,
+            stack_bytes: info.stack_bytes,
+            _scene: PhantomData,
+        })
+    }
+
+    /// The arena's bytes the hierarchy uses.
+    pub fn arena_bytes(&self) -> usize {
+        self.arena_bytes
+    }
+
+    /// A traversal stack for this hierarchy's calls: its `stack_bytes`,
+    /// 16-byte aligned.
+    pub fn stack(&self) -> Vec<u128> {
+        std::vec![0u128; self.stack_bytes.div_ceil(16)]
+    }
+
+    /// A tracer on this hierarchy with a stack of its own.
+    pub fn tracer(&self) -> Result<CTracer<'_, WideCalls>, CorayStatus> {
+        CTracer::new(self.stack_bytes, |stack, bytes, tracer| {
+            // SAFETY: the handle is this hierarchy's (its arena and
+            // scene alive for the borrow the tracer keeps); the stack
+            // is 16-byte aligned and as long as passed; the tracer is a
+            // live heap value.
+            unsafe { coray_wide_tracer(&self.handle, stack.cast(), bytes, tracer) }
+        })
+    }
+
+    /// Closest hits of `rays` by one `coray_wide_intersect` call, on
+    /// `stack` (from [`CWide::stack`]).
+    pub fn intersect(
+        &self,
+        rays: &[Ray],
+        hits: &mut [Hit],
+        stack: &mut [u128],
+    ) -> Result<(), CorayStatus> {
+        let n = rays.len().min(hits.len());
+        // SAFETY: Ray and CorayRay, Hit and CorayHit share their layout
+        // (asserted in abi.rs); both arrays hold at least n elements and
+        // are disjoint borrows; the handle is this hierarchy's, its arena
+        // and scene alive ('s); the stack is 16-byte aligned, its bytes
+        // passed.
+        status(unsafe {
+            coray_wide_intersect(
+                &self.handle,
+                rays.as_ptr().cast(),
+                hits.as_mut_ptr().cast(),
+                n,
+                stack.as_mut_ptr().cast(),
+                size_of_val(stack),
+                core::ptr::null_mut(),
+            )
+        })
+    }
+
+    /// The closest hit of `ray` by one `coray_wide_intersect1` call.
+    pub fn intersect1(&self, ray: &Ray, stack: &mut [u128]) -> Result<Hit, CorayStatus> {
+        let mut hit = Hit::MISS;
+        // SAFETY: as in `intersect`, for one ray and one hit (a local).
+        let s = unsafe {
+            coray_wide_intersect1(
+                &self.handle,
+                (ray as *const Ray).cast(),
+                (&mut hit as *mut Hit).cast(),
+                stack.as_mut_ptr().cast(),
+                size_of_val(stack),
+                core::ptr::null_mut(),
+            )
+        };
+        status(s).map(|()| hit)
+    }
+
+    /// Whether something blocks `ray`, by one `coray_wide_occluded1` call.
+    pub fn occluded1(&self, ray: &Ray, stack: &mut [u128]) -> Result<bool, CorayStatus> {
+        let mut out = 0u8;
+        // SAFETY: as in `intersect`, for one ray and one byte (a local).
+        let s = unsafe {
+            coray_wide_occluded1(
+                &self.handle,
+                (ray as *const Ray).cast(),
+                &mut out,
+                stack.as_mut_ptr().cast(),
+                size_of_val(stack),
+                core::ptr::null_mut(),
+            )
+        };
+        status(s).map(|()| out != 0)
+    }
+
+    /// Any-hit answers for `rays` (1 blocked, 0 free) by one
+    /// `coray_wide_occluded` call.
+    pub fn occluded(
+        &self,
+        rays: &[Ray],
+        out: &mut [u8],
+        stack: &mut [u128],
+    ) -> Result<(), CorayStatus> {
+        let n = rays.len().min(out.len());
+        // SAFETY: as in `intersect`, with `out` holding at least n bytes.
+        status(unsafe {
+            coray_wide_occluded(
+                &self.handle,
+                rays.as_ptr().cast(),
+                out.as_mut_ptr(),
+                n,
+                stack.as_mut_ptr().cast(),
+                size_of_val(stack),
+                core::ptr::null_mut(),
+            )
+        })
+    }
+}
+
+/// What `coray bench`'s C methods call on a structure opened through the
+/// C ABI ([`CKdTree`], [`CWide`]): array calls, one-ray calls with the
+/// handle, and tracers, each on its own kind of stack.
+pub trait CStructure {
+    /// One thread's traversal stack for the handle's calls.
+    type Stack;
+    /// A stack for this structure's calls.
+    fn new_stack(&self) -> Self::Stack;
+    /// Closest hits of `rays`, one array call.
+    fn intersect_all(
+        &self,
+        rays: &[Ray],
+        hits: &mut [Hit],
+        stack: &mut Self::Stack,
+    ) -> Result<(), CorayStatus>;
+    /// Any-hit answers (1 blocked, 0 free), one array call.
+    fn occluded_all(
+        &self,
+        rays: &[Ray],
+        out: &mut [u8],
+        stack: &mut Self::Stack,
+    ) -> Result<(), CorayStatus>;
+    /// The closest hit of one ray, one call with the handle.
+    fn intersect_one(&self, ray: &Ray, stack: &mut Self::Stack) -> Result<Hit, CorayStatus>;
+    /// Whether something blocks one ray, one call with the handle.
+    fn occluded_one(&self, ray: &Ray, stack: &mut Self::Stack) -> Result<bool, CorayStatus>;
+    /// The family's tracer calls.
+    type Calls: TracerCalls;
+    /// A tracer with a stack of its own.
+    fn new_tracer(&self) -> Result<CTracer<'_, Self::Calls>, CorayStatus>;
+}
+
+impl CStructure for CKdTree<'_> {
+    type Stack = CStack;
+    type Calls = KdCalls;
+    fn new_stack(&self) -> CStack {
+        CStack::default()
+    }
+    fn intersect_all(
+        &self,
+        rays: &[Ray],
+        hits: &mut [Hit],
+        stack: &mut CStack,
+    ) -> Result<(), CorayStatus> {
+        self.intersect(rays, hits, stack)
+    }
+    fn occluded_all(
+        &self,
+        rays: &[Ray],
+        out: &mut [u8],
+        stack: &mut CStack,
+    ) -> Result<(), CorayStatus> {
+        self.occluded(rays, out, stack)
+    }
+    fn intersect_one(&self, ray: &Ray, stack: &mut CStack) -> Result<Hit, CorayStatus> {
+        self.intersect1(ray, stack)
+    }
+    fn occluded_one(&self, ray: &Ray, stack: &mut CStack) -> Result<bool, CorayStatus> {
+        self.occluded1(ray, stack)
+    }
+    fn new_tracer(&self) -> Result<CTracer<'_, Self::Calls>, CorayStatus> {
+        self.tracer()
+    }
+}
+
+impl CStructure for CWide<'_> {
+    type Stack = Vec<u128>;
+    type Calls = WideCalls;
+    fn new_stack(&self) -> Vec<u128> {
+        self.stack()
+    }
+    fn intersect_all(
+        &self,
+        rays: &[Ray],
+        hits: &mut [Hit],
+        stack: &mut Vec<u128>,
+    ) -> Result<(), CorayStatus> {
+        self.intersect(rays, hits, stack)
+    }
+    fn occluded_all(
+        &self,
+        rays: &[Ray],
+        out: &mut [u8],
+        stack: &mut Vec<u128>,
+    ) -> Result<(), CorayStatus> {
+        self.occluded(rays, out, stack)
+    }
+    fn intersect_one(&self, ray: &Ray, stack: &mut Vec<u128>) -> Result<Hit, CorayStatus> {
+        self.intersect1(ray, stack)
+    }
+    fn occluded_one(&self, ray: &Ray, stack: &mut Vec<u128>) -> Result<bool, CorayStatus> {
+        self.occluded1(ray, stack)
+    }
+    fn new_tracer(&self) -> Result<CTracer<'_, Self::Calls>, CorayStatus> {
+        self.tracer()
+    }
+}
+
 fn status(s: CorayStatus) -> Result<(), CorayStatus> {
     match s {
         CorayStatus::Ok => Ok(()),
@@ -245,8 +561,9 @@ mod tests {
     use coray::owned::OwnedKd;
     use coray::{Sphere, Vec3};
 
-    /// Every call of the wrapper answers as the core does on the same
-    /// tree, for closest and any hits, arrays and single rays.
+    /// Every call of the wrappers answers as the core's kd-tree does on the
+    /// same scene, for closest and any hits, arrays and single rays, on the
+    /// kd-tree and on the wide hierarchy.
     #[test]
     fn the_c_calls_answer_as_the_core() {
         let vertices = [
@@ -312,5 +629,25 @@ mod tests {
             }
             assert_eq!(tr.stats().expect("statistics").rays, 2 * rays.len() as u64);
         }
+        // The wide hierarchy: arrays and its tracer.
+        let w = CWide::new(&scene).expect("wide build and open");
+        let mut stack = w.stack();
+        let mut hits = std::vec![Hit::MISS; rays.len()];
+        w.intersect(&rays, &mut hits, &mut stack)
+            .expect("array call");
+        let mut occ = std::vec![0u8; rays.len()];
+        w.occluded(&rays, &mut occ, &mut stack).expect("array call");
+        let mut tr = w.tracer().expect("tracer");
+        for (i, r) in rays.iter().enumerate() {
+            assert_eq!((hits[i].prim_id, hits[i].t), (want[i].prim_id, want[i].t));
+            assert_eq!(occ[i] != 0, want[i].is_hit());
+            let one = w.intersect1(r, &mut stack).expect("one-ray call");
+            assert_eq!((one.prim_id, one.t), (want[i].prim_id, want[i].t));
+            assert_eq!(w.occluded1(r, &mut stack), Ok(want[i].is_hit()));
+            let one = tr.intersect1(r).expect("tracer call");
+            assert_eq!((one.prim_id, one.t), (want[i].prim_id, want[i].t));
+            assert_eq!(tr.occluded1(r), Ok(want[i].is_hit()));
+        }
+        assert_eq!(tr.stats().expect("statistics").rays, 2 * rays.len() as u64);
     }
 }

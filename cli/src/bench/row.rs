@@ -269,7 +269,10 @@ pub fn run_rays(
     });
     let n = w.primary.len().max(1) as f64;
     // Embree counts nothing; the C-ABI rows pass NULL statistics.
-    let counted = !matches!(built.method, Method::Embree(_) | Method::KdC { .. });
+    let counted = !matches!(
+        built.method,
+        Method::Embree(_) | Method::KdC { .. } | Method::WideC { .. }
+    );
     let (mismatches, ties) = judge(built, w, tree, &hits, &occluded).counts();
     let mut all = pst;
     all.add(&sst);

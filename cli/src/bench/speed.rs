@@ -23,8 +23,10 @@ pub const INCOHERENT_RAYS: usize = 1_000_000;
 
 /// The coray methods traced ray by ray on every set; `kd-c`, `kd-c1` and
 /// `kd-c1-handle` are `kd` through the C ABI (array calls; one call per
-/// ray on a tracer per thread; one call per ray with the handle and stack).
-pub const RAY_METHODS: [&str; 8] = [
+/// ray on a tracer per thread; one call per ray with the handle and
+/// stack), `wide-c1` is `wide` one call per ray on a tracer (the fastest
+/// one-ray C call on incoherent rays).
+pub const RAY_METHODS: [&str; 9] = [
     "kd",
     "kd-rope",
     "kd-packet",
@@ -33,6 +35,7 @@ pub const RAY_METHODS: [&str; 8] = [
     "kd-c",
     "kd-c1",
     "kd-c1-handle",
+    "wide-c1",
 ];
 
 /// The image casts timed on the primary set (one thread: a cast is one
@@ -293,7 +296,8 @@ columns: rays = rays in the set (primary: one per pixel in 4 x 2 blocks; shadow:
   Mrays/s on the same rays (kd-c / kd-c1 / kd-c1-handle: kd through the C ABI, one
   coray_kdtree_intersect call per 4096 rays / one coray_kdtree_tracer_intersect1 call per
   ray on a tracer per thread / one coray_kdtree_intersect1 call per ray with the handle and
-  stack; occluded likewise; slcts2d / hlcts2d / cast-packets: coray_kdtree_cast_image over
+  stack; occluded likewise; wide-c1: wide likewise, one coray_wide_tracer_intersect1 call
+  per ray on a tracer per thread); slcts2d / hlcts2d / cast-packets: coray_kdtree_cast_image over
   the camera's image, one thread, by SLCTS-2D, HLCTS-2D and 4 x 2 packet tiles, the C cast's
   default); mism = rays of any coray method answering otherwise than the
   kd-tree's hierarchical traversal (Embree: beyond coray::tolerance's tie rules). Best of
