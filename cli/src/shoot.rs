@@ -201,28 +201,28 @@ pub struct CShooter<'a, T> {
 
 /// One thread's state for [`CShooter`]: a traversal stack, the any-hit
 /// answers as bytes, and the thread's tracer (for `kd-c1`, `wide-c1`).
-pub struct CCtx<'a, S, F> {
-    stack: S,
+pub struct CCtx<'a, F> {
+    stack: Vec<u128>,
     bytes: Vec<u8>,
     tracer: Option<coray_ffi::through_c::CTracer<'a, F>>,
 }
 
 impl<'a, T: CStructure + Sync> Shooter for CShooter<'a, T> {
-    type Ctx = CCtx<'a, T::Stack, T::Calls>;
+    type Ctx = CCtx<'a, T::Calls>;
 
     fn ctx(&self) -> Self::Ctx {
         let s: &'a T = self.structure;
         CCtx {
-            stack: s.new_stack(),
+            stack: s.stack(),
             bytes: Vec::new(),
-            tracer: (self.calls == CCalls::Tracer).then(|| s.new_tracer().expect("valid tracer")),
+            tracer: (self.calls == CCalls::Tracer).then(|| s.tracer().expect("valid tracer")),
         }
     }
 
     fn intersect(&self, ray: &Ray, ctx: &mut Self::Ctx, _: &mut TraceStats) -> Hit {
         match &mut ctx.tracer {
             Some(t) => t.intersect1(ray),
-            None => self.structure.intersect_one(ray, &mut ctx.stack),
+            None => self.structure.intersect1(ray, &mut ctx.stack),
         }
         .expect("valid call")
     }
@@ -236,7 +236,7 @@ impl<'a, T: CStructure + Sync> Shooter for CShooter<'a, T> {
     ) -> bool {
         match &mut ctx.tracer {
             Some(t) => t.occluded1(ray),
-            None => self.structure.occluded_one(ray, &mut ctx.stack),
+            None => self.structure.occluded1(ray, &mut ctx.stack),
         }
         .expect("valid call")
     }
@@ -250,7 +250,7 @@ impl<'a, T: CStructure + Sync> Shooter for CShooter<'a, T> {
     ) {
         if self.calls == CCalls::Arrays {
             self.structure
-                .intersect_all(rays, out, &mut ctx.stack)
+                .intersect(rays, out, &mut ctx.stack)
                 .expect("valid call");
         } else {
             for (r, h) in rays.iter().zip(out.iter_mut()) {
@@ -270,7 +270,7 @@ impl<'a, T: CStructure + Sync> Shooter for CShooter<'a, T> {
         if self.calls == CCalls::Arrays {
             ctx.bytes.resize(rays.len(), 0);
             self.structure
-                .occluded_all(rays, &mut ctx.bytes, &mut ctx.stack)
+                .occluded(rays, &mut ctx.bytes, &mut ctx.stack)
                 .expect("valid call");
             for (o, b) in out.iter_mut().zip(&ctx.bytes) {
                 *o = *b != 0;

@@ -35,7 +35,7 @@ fn align16(n: usize) -> usize {
 }
 
 /// 16-byte aligned memory for an arena or scratch.
-fn aligned(bytes: usize) -> Vec<u128> {
+pub(crate) fn aligned(bytes: usize) -> Vec<u128> {
     std::vec![0u128; bytes.div_ceil(16).max(1)]
 }
 

@@ -9,7 +9,7 @@
 //! owns its arena and handle and hands the entry points only pointers it
 //! made from live borrows.
 
-use crate::saved::{build_arena, c_scene};
+use crate::saved::{aligned, build_arena, c_scene};
 use crate::*;
 use coray::{Hit, Ray, Scene};
 use core::marker::PhantomData;
@@ -94,7 +94,7 @@ impl<F: TracerCalls> CTracer<'_, F> {
     ) -> Result<Self, CorayStatus> {
         let mut t = CTracer {
             tracer: std::boxed::Box::new(CorayTracer { opaque: [0; 32] }),
-            _stack: std::vec![0u128; stack_bytes.div_ceil(16)],
+            _stack: aligned(stack_bytes),
             _structure: PhantomData,
         };
         let s = make(t._stack.as_mut_ptr(), stack_bytes, &mut t.tracer);
@@ -140,15 +140,6 @@ impl<F: TracerCalls> CTracer<'_, F> {
     }
 }
 
-/// One thread's traversal stack: `CORAY_KDTREE_STACK_BYTES`, 16-byte aligned.
-pub struct CStack(Vec<u128>);
-
-impl Default for CStack {
-    fn default() -> CStack {
-        CStack(std::vec![0u128; CORAY_KDTREE_STACK_BYTES / 16])
-    }
-}
-
 impl<'s> CKdTree<'s> {
     /// Builds a tree on `scene` with `preset` (`CORAY_KD_PRESET_*`) and
     /// `omit_ropes` (`CorayKdParams::omit_ropes`) and opens it, to be
@@ -178,111 +169,9 @@ impl<'s> CKdTree<'s> {
         })
     }
 
-    /// A tracer on this tree by its traversal, with a stack of its own.
-    pub fn tracer(&self) -> Result<CTracer<'_, KdCalls>, CorayStatus> {
-        CTracer::new(CORAY_KDTREE_STACK_BYTES, |stack, bytes, tracer| {
-            // SAFETY: the handle is this tree's (its arena and scene
-            // alive for the borrow the tracer keeps); the stack is
-            // 16-byte aligned and as long as passed; the tracer is a
-            // live heap value.
-            unsafe {
-                coray_kdtree_tracer(&self.handle, self.traversal, stack.cast(), bytes, tracer)
-            }
-        })
-    }
-
     /// The arena's bytes.
     pub fn arena_bytes(&self) -> usize {
         self.arena_bytes
-    }
-
-    /// Closest hits of `rays` by one `coray_kdtree_intersect` call.
-    pub fn intersect(
-        &self,
-        rays: &[Ray],
-        hits: &mut [Hit],
-        stack: &mut CStack,
-    ) -> Result<(), CorayStatus> {
-        let n = rays.len().min(hits.len());
-        // SAFETY: Ray and CorayRay, Hit and CorayHit share their layout
-        // (asserted in abi.rs); both arrays hold at least n elements and
-        // are disjoint borrows; the handle is this tree's, its arena and
-        // scene alive ('s); the stack is 16-byte aligned and as long as
-        // passed.
-        let s = unsafe {
-            coray_kdtree_intersect(
-                &self.handle,
-                self.traversal,
-                rays.as_ptr().cast(),
-                hits.as_mut_ptr().cast(),
-                n,
-                stack.0.as_mut_ptr().cast(),
-                CORAY_KDTREE_STACK_BYTES,
-                core::ptr::null_mut(),
-            )
-        };
-        status(s)
-    }
-
-    /// The closest hit of `ray` by one `coray_kdtree_intersect1` call.
-    pub fn intersect1(&self, ray: &Ray, stack: &mut CStack) -> Result<Hit, CorayStatus> {
-        let mut hit = Hit::MISS;
-        // SAFETY: as in `intersect`, for one ray and one hit (a local).
-        let s = unsafe {
-            coray_kdtree_intersect1(
-                &self.handle,
-                self.traversal,
-                (ray as *const Ray).cast(),
-                (&mut hit as *mut Hit).cast(),
-                stack.0.as_mut_ptr().cast(),
-                CORAY_KDTREE_STACK_BYTES,
-                core::ptr::null_mut(),
-            )
-        };
-        status(s).map(|()| hit)
-    }
-
-    /// Any-hit answers for `rays` (1 blocked, 0 free) by one
-    /// `coray_kdtree_occluded` call.
-    pub fn occluded(
-        &self,
-        rays: &[Ray],
-        out: &mut [u8],
-        stack: &mut CStack,
-    ) -> Result<(), CorayStatus> {
-        let n = rays.len().min(out.len());
-        // SAFETY: as in `intersect`, with `out` holding at least n bytes.
-        let s = unsafe {
-            coray_kdtree_occluded(
-                &self.handle,
-                self.traversal,
-                rays.as_ptr().cast(),
-                out.as_mut_ptr(),
-                n,
-                stack.0.as_mut_ptr().cast(),
-                CORAY_KDTREE_STACK_BYTES,
-                core::ptr::null_mut(),
-            )
-        };
-        status(s)
-    }
-
-    /// Whether something blocks `ray`, by one `coray_kdtree_occluded1` call.
-    pub fn occluded1(&self, ray: &Ray, stack: &mut CStack) -> Result<bool, CorayStatus> {
-        let mut out = 0u8;
-        // SAFETY: as in `intersect`, for one ray and one byte (a local).
-        let s = unsafe {
-            coray_kdtree_occluded1(
-                &self.handle,
-                self.traversal,
-                (ray as *const Ray).cast(),
-                &mut out,
-                stack.0.as_mut_ptr().cast(),
-                CORAY_KDTREE_STACK_BYTES,
-                core::ptr::null_mut(),
-            )
-        };
-        status(s).map(|()| out != 0)
     }
 }
 
@@ -309,8 +198,8 @@ impl<'s> CWide<'s> {
         let mut req = coray_requirements_default();
         // SAFETY: params and req are live locals with struct_size set.
         status(unsafe { coray_wide_requirements(scene.prim_count(), &params, &mut req) })?;
-        let mut arena = std::vec![0u128; req.arena_bytes.div_ceil(16)];
-        let mut scratch = std::vec![0u128; req.scratch_bytes.div_ceil(16)];
+        let mut arena = aligned(req.arena_bytes);
+        let mut scratch = aligned(req.scratch_bytes);
         // SAFETY: c's arrays are `scene`'s, live for the call; arena and
         // scratch are 16-byte aligned and at least as long as passed.
         status(unsafe {
@@ -346,27 +235,57 @@ impl<'s> CWide<'s> {
     pub fn arena_bytes(&self) -> usize {
         self.arena_bytes
     }
+}
 
-    /// A traversal stack for this hierarchy's calls: its `stack_bytes`,
-    /// 16-byte aligned.
-    pub fn stack(&self) -> Vec<u128> {
-        std::vec![0u128; self.stack_bytes.div_ceil(16)]
+/// What `coray bench`'s C methods call on a structure opened through the
+/// C ABI ([`CKdTree`], [`CWide`]): array calls, one-ray calls with the
+/// handle (on a stack from [`CStructure::stack`]), and tracers.
+pub trait CStructure {
+    /// The family's tracer calls.
+    type Calls: TracerCalls;
+    /// One thread's traversal stack for the handle's calls, 16-byte
+    /// aligned.
+    fn stack(&self) -> Vec<u128>;
+    /// A tracer with a stack of its own.
+    fn tracer(&self) -> Result<CTracer<'_, Self::Calls>, CorayStatus>;
+    /// Closest hits of `rays`, one array call.
+    fn intersect(
+        &self,
+        rays: &[Ray],
+        hits: &mut [Hit],
+        stack: &mut [u128],
+    ) -> Result<(), CorayStatus>;
+    /// Any-hit answers (1 blocked, 0 free), one array call.
+    fn occluded(&self, rays: &[Ray], out: &mut [u8], stack: &mut [u128])
+        -> Result<(), CorayStatus>;
+    /// The closest hit of one ray, one call with the handle.
+    fn intersect1(&self, ray: &Ray, stack: &mut [u128]) -> Result<Hit, CorayStatus>;
+    /// Whether something blocks one ray, one call with the handle.
+    fn occluded1(&self, ray: &Ray, stack: &mut [u128]) -> Result<bool, CorayStatus>;
+}
+
+impl CStructure for CKdTree<'_> {
+    type Calls = KdCalls;
+
+    fn stack(&self) -> Vec<u128> {
+        aligned(CORAY_KDTREE_STACK_BYTES)
     }
 
-    /// A tracer on this hierarchy with a stack of its own.
-    pub fn tracer(&self) -> Result<CTracer<'_, WideCalls>, CorayStatus> {
-        CTracer::new(self.stack_bytes, |stack, bytes, tracer| {
-            // SAFETY: the handle is this hierarchy's (its arena and
-            // scene alive for the borrow the tracer keeps); the stack
-            // is 16-byte aligned and as long as passed; the tracer is a
+    /// A tracer on this tree by its traversal.
+    fn tracer(&self) -> Result<CTracer<'_, KdCalls>, CorayStatus> {
+        CTracer::new(CORAY_KDTREE_STACK_BYTES, |stack, bytes, tracer| {
+            // SAFETY: the handle is this tree's (its arena and scene
+            // alive for the borrow the tracer keeps); the stack is
+            // 16-byte aligned and as long as passed; the tracer is a
             // live heap value.
-            unsafe { coray_wide_tracer(&self.handle, stack.cast(), bytes, tracer) }
+            unsafe {
+                coray_kdtree_tracer(&self.handle, self.traversal, stack.cast(), bytes, tracer)
+            }
         })
     }
 
-    /// Closest hits of `rays` by one `coray_wide_intersect` call, on
-    /// `stack` (from [`CWide::stack`]).
-    pub fn intersect(
+    /// By one `coray_kdtree_intersect` call.
+    fn intersect(
         &self,
         rays: &[Ray],
         hits: &mut [Hit],
@@ -375,9 +294,110 @@ impl<'s> CWide<'s> {
         let n = rays.len().min(hits.len());
         // SAFETY: Ray and CorayRay, Hit and CorayHit share their layout
         // (asserted in abi.rs); both arrays hold at least n elements and
-        // are disjoint borrows; the handle is this hierarchy's, its arena
-        // and scene alive ('s); the stack is 16-byte aligned, its bytes
+        // are disjoint borrows; the handle is this tree's, its arena and
+        // scene alive ('s); the stack is 16-byte aligned, its bytes
         // passed.
+        status(unsafe {
+            coray_kdtree_intersect(
+                &self.handle,
+                self.traversal,
+                rays.as_ptr().cast(),
+                hits.as_mut_ptr().cast(),
+                n,
+                stack.as_mut_ptr().cast(),
+                size_of_val(stack),
+                core::ptr::null_mut(),
+            )
+        })
+    }
+
+    /// By one `coray_kdtree_occluded` call.
+    fn occluded(
+        &self,
+        rays: &[Ray],
+        out: &mut [u8],
+        stack: &mut [u128],
+    ) -> Result<(), CorayStatus> {
+        let n = rays.len().min(out.len());
+        // SAFETY: as in `intersect`, with `out` holding at least n bytes.
+        status(unsafe {
+            coray_kdtree_occluded(
+                &self.handle,
+                self.traversal,
+                rays.as_ptr().cast(),
+                out.as_mut_ptr(),
+                n,
+                stack.as_mut_ptr().cast(),
+                size_of_val(stack),
+                core::ptr::null_mut(),
+            )
+        })
+    }
+
+    /// By one `coray_kdtree_intersect1` call.
+    fn intersect1(&self, ray: &Ray, stack: &mut [u128]) -> Result<Hit, CorayStatus> {
+        let mut hit = Hit::MISS;
+        // SAFETY: as in `intersect`, for one ray and one hit (a local).
+        let s = unsafe {
+            coray_kdtree_intersect1(
+                &self.handle,
+                self.traversal,
+                (ray as *const Ray).cast(),
+                (&mut hit as *mut Hit).cast(),
+                stack.as_mut_ptr().cast(),
+                size_of_val(stack),
+                core::ptr::null_mut(),
+            )
+        };
+        status(s).map(|()| hit)
+    }
+
+    /// By one `coray_kdtree_occluded1` call.
+    fn occluded1(&self, ray: &Ray, stack: &mut [u128]) -> Result<bool, CorayStatus> {
+        let mut out = 0u8;
+        // SAFETY: as in `intersect`, for one ray and one byte (a local).
+        let s = unsafe {
+            coray_kdtree_occluded1(
+                &self.handle,
+                self.traversal,
+                (ray as *const Ray).cast(),
+                &mut out,
+                stack.as_mut_ptr().cast(),
+                size_of_val(stack),
+                core::ptr::null_mut(),
+            )
+        };
+        status(s).map(|()| out != 0)
+    }
+}
+
+impl CStructure for CWide<'_> {
+    type Calls = WideCalls;
+
+    /// Its `stack_bytes`.
+    fn stack(&self) -> Vec<u128> {
+        aligned(self.stack_bytes)
+    }
+
+    fn tracer(&self) -> Result<CTracer<'_, WideCalls>, CorayStatus> {
+        CTracer::new(self.stack_bytes, |stack, bytes, tracer| {
+            // SAFETY: the handle is this hierarchy's (its arena and scene
+            // alive for the borrow the tracer keeps); the stack is 16-byte
+            // aligned and as long as passed; the tracer is a live heap
+            // value.
+            unsafe { coray_wide_tracer(&self.handle, stack.cast(), bytes, tracer) }
+        })
+    }
+
+    /// By one `coray_wide_intersect` call.
+    fn intersect(
+        &self,
+        rays: &[Ray],
+        hits: &mut [Hit],
+        stack: &mut [u128],
+    ) -> Result<(), CorayStatus> {
+        let n = rays.len().min(hits.len());
+        // SAFETY: as CKdTree's, on this hierarchy's handle.
         status(unsafe {
             coray_wide_intersect(
                 &self.handle,
@@ -391,43 +411,8 @@ impl<'s> CWide<'s> {
         })
     }
 
-    /// The closest hit of `ray` by one `coray_wide_intersect1` call.
-    pub fn intersect1(&self, ray: &Ray, stack: &mut [u128]) -> Result<Hit, CorayStatus> {
-        let mut hit = Hit::MISS;
-        // SAFETY: as in `intersect`, for one ray and one hit (a local).
-        let s = unsafe {
-            coray_wide_intersect1(
-                &self.handle,
-                (ray as *const Ray).cast(),
-                (&mut hit as *mut Hit).cast(),
-                stack.as_mut_ptr().cast(),
-                size_of_val(stack),
-                core::ptr::null_mut(),
-            )
-        };
-        status(s).map(|()| hit)
-    }
-
-    /// Whether something blocks `ray`, by one `coray_wide_occluded1` call.
-    pub fn occluded1(&self, ray: &Ray, stack: &mut [u128]) -> Result<bool, CorayStatus> {
-        let mut out = 0u8;
-        // SAFETY: as in `intersect`, for one ray and one byte (a local).
-        let s = unsafe {
-            coray_wide_occluded1(
-                &self.handle,
-                (ray as *const Ray).cast(),
-                &mut out,
-                stack.as_mut_ptr().cast(),
-                size_of_val(stack),
-                core::ptr::null_mut(),
-            )
-        };
-        status(s).map(|()| out != 0)
-    }
-
-    /// Any-hit answers for `rays` (1 blocked, 0 free) by one
-    /// `coray_wide_occluded` call.
-    pub fn occluded(
+    /// By one `coray_wide_occluded` call.
+    fn occluded(
         &self,
         rays: &[Ray],
         out: &mut [u8],
@@ -447,103 +432,39 @@ impl<'s> CWide<'s> {
             )
         })
     }
-}
 
-/// What `coray bench`'s C methods call on a structure opened through the
-/// C ABI ([`CKdTree`], [`CWide`]): array calls, one-ray calls with the
-/// handle, and tracers, each on its own kind of stack.
-pub trait CStructure {
-    /// One thread's traversal stack for the handle's calls.
-    type Stack;
-    /// A stack for this structure's calls.
-    fn new_stack(&self) -> Self::Stack;
-    /// Closest hits of `rays`, one array call.
-    fn intersect_all(
-        &self,
-        rays: &[Ray],
-        hits: &mut [Hit],
-        stack: &mut Self::Stack,
-    ) -> Result<(), CorayStatus>;
-    /// Any-hit answers (1 blocked, 0 free), one array call.
-    fn occluded_all(
-        &self,
-        rays: &[Ray],
-        out: &mut [u8],
-        stack: &mut Self::Stack,
-    ) -> Result<(), CorayStatus>;
-    /// The closest hit of one ray, one call with the handle.
-    fn intersect_one(&self, ray: &Ray, stack: &mut Self::Stack) -> Result<Hit, CorayStatus>;
-    /// Whether something blocks one ray, one call with the handle.
-    fn occluded_one(&self, ray: &Ray, stack: &mut Self::Stack) -> Result<bool, CorayStatus>;
-    /// The family's tracer calls.
-    type Calls: TracerCalls;
-    /// A tracer with a stack of its own.
-    fn new_tracer(&self) -> Result<CTracer<'_, Self::Calls>, CorayStatus>;
-}
+    /// By one `coray_wide_intersect1` call.
+    fn intersect1(&self, ray: &Ray, stack: &mut [u128]) -> Result<Hit, CorayStatus> {
+        let mut hit = Hit::MISS;
+        // SAFETY: as in `intersect`, for one ray and one hit (a local).
+        let s = unsafe {
+            coray_wide_intersect1(
+                &self.handle,
+                (ray as *const Ray).cast(),
+                (&mut hit as *mut Hit).cast(),
+                stack.as_mut_ptr().cast(),
+                size_of_val(stack),
+                core::ptr::null_mut(),
+            )
+        };
+        status(s).map(|()| hit)
+    }
 
-impl CStructure for CKdTree<'_> {
-    type Stack = CStack;
-    type Calls = KdCalls;
-    fn new_stack(&self) -> CStack {
-        CStack::default()
-    }
-    fn intersect_all(
-        &self,
-        rays: &[Ray],
-        hits: &mut [Hit],
-        stack: &mut CStack,
-    ) -> Result<(), CorayStatus> {
-        self.intersect(rays, hits, stack)
-    }
-    fn occluded_all(
-        &self,
-        rays: &[Ray],
-        out: &mut [u8],
-        stack: &mut CStack,
-    ) -> Result<(), CorayStatus> {
-        self.occluded(rays, out, stack)
-    }
-    fn intersect_one(&self, ray: &Ray, stack: &mut CStack) -> Result<Hit, CorayStatus> {
-        self.intersect1(ray, stack)
-    }
-    fn occluded_one(&self, ray: &Ray, stack: &mut CStack) -> Result<bool, CorayStatus> {
-        self.occluded1(ray, stack)
-    }
-    fn new_tracer(&self) -> Result<CTracer<'_, Self::Calls>, CorayStatus> {
-        self.tracer()
-    }
-}
-
-impl CStructure for CWide<'_> {
-    type Stack = Vec<u128>;
-    type Calls = WideCalls;
-    fn new_stack(&self) -> Vec<u128> {
-        self.stack()
-    }
-    fn intersect_all(
-        &self,
-        rays: &[Ray],
-        hits: &mut [Hit],
-        stack: &mut Vec<u128>,
-    ) -> Result<(), CorayStatus> {
-        self.intersect(rays, hits, stack)
-    }
-    fn occluded_all(
-        &self,
-        rays: &[Ray],
-        out: &mut [u8],
-        stack: &mut Vec<u128>,
-    ) -> Result<(), CorayStatus> {
-        self.occluded(rays, out, stack)
-    }
-    fn intersect_one(&self, ray: &Ray, stack: &mut Vec<u128>) -> Result<Hit, CorayStatus> {
-        self.intersect1(ray, stack)
-    }
-    fn occluded_one(&self, ray: &Ray, stack: &mut Vec<u128>) -> Result<bool, CorayStatus> {
-        self.occluded1(ray, stack)
-    }
-    fn new_tracer(&self) -> Result<CTracer<'_, Self::Calls>, CorayStatus> {
-        self.tracer()
+    /// By one `coray_wide_occluded1` call.
+    fn occluded1(&self, ray: &Ray, stack: &mut [u128]) -> Result<bool, CorayStatus> {
+        let mut out = 0u8;
+        // SAFETY: as in `intersect`, for one ray and one byte (a local).
+        let s = unsafe {
+            coray_wide_occluded1(
+                &self.handle,
+                (ray as *const Ray).cast(),
+                &mut out,
+                stack.as_mut_ptr().cast(),
+                size_of_val(stack),
+                core::ptr::null_mut(),
+            )
+        };
+        status(s).map(|()| out != 0)
     }
 }
 
@@ -608,7 +529,7 @@ mod tests {
         ] {
             let t =
                 CKdTree::new(&scene, CORAY_KD_PRESET_AUTO, omit_ropes, traversal).expect("open");
-            let mut stack = CStack::default();
+            let mut stack = t.stack();
             let mut hits = std::vec![Hit::MISS; rays.len()];
             t.intersect(&rays, &mut hits, &mut stack)
                 .expect("array call");
