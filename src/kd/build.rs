@@ -734,12 +734,17 @@ impl<'s, 'a> Builder<'s, 'a> {
         while i < ev.len() {
             // Every event at this position: its ends, planars and starts.
             let (p, bits) = (ev[i].pos(), ev[i].pos_bits());
-            let mut kinds = [0usize; 4];
+            // Ends and starts counted in one register, 32 bits each (a
+            // count in an array would chain its increments through memory);
+            // the rest are planar.
+            let (first, mut ends_starts) = (i, 0u64);
             while i < ev.len() && ev[i].pos_bits() == bits {
-                kinds[ev[i].kind() as usize] += 1;
+                let kind = ev[i].kind();
+                ends_starts += ((kind == END) as u64) | ((kind == START) as u64) << 32;
                 i += 1;
             }
-            let [ends, planars, starts, _] = kinds;
+            let (ends, starts) = (ends_starts as u32 as usize, (ends_starts >> 32) as usize);
+            let planars = i - first - ends - starts;
             nr -= planars + ends;
             if p > lo && p < hi {
                 consider(p, nl, nr, planars);
