@@ -34,9 +34,20 @@ const END: u32 = 0;
 const PLANAR: u32 = 1;
 const START: u32 = 2;
 
+/// What an event of each kind adds to a sweep's count of a position's
+/// ends (low 32 bits) and starts (high 32 bits): one load and one add.
+const ENDS_STARTS: [u64; 4] = {
+    let mut c = [0u64; 4];
+    c[END as usize] = 1;
+    c[START as usize] = 1 << 32;
+    c
+};
+
 const BOTH: u8 = 0;
 const LEFT: u8 = 1;
 const RIGHT: u8 = 2;
+// `merge` steps its cursors by these bits.
+const _: () = assert!(BOTH == 0 && LEFT == 1 && RIGHT == 2);
 
 impl KdEvent {
     /// Primitives fit in 30 bits (the scene limit is below).
@@ -739,8 +750,7 @@ impl<'s, 'a> Builder<'s, 'a> {
             // the rest are planar.
             let (first, mut ends_starts) = (i, 0u64);
             while i < ev.len() && ev[i].pos_bits() == bits {
-                let kind = ev[i].kind();
-                ends_starts += ((kind == END) as u64) | ((kind == START) as u64) << 32;
+                ends_starts += ENDS_STARTS[ev[i].kind() as usize & 3];
                 i += 1;
             }
             let (ends, starts) = (ends_starts as u32 as usize, (ends_starts >> 32) as usize);
@@ -1053,8 +1063,9 @@ impl<'s, 'a> Builder<'s, 'a> {
     ///
     /// The old events are partitioned first, without a branch on their
     /// side (whose outcome is a coin toss a predictor cannot learn): each
-    /// is stored at its side's cursor, a dropped one back in its own slot.
-    /// The new events then go in from the back ([`merge_from_back`]).
+    /// is stored at its side's cursor, a dropped one (a straddler's) at the
+    /// right cursor without moving it. The new events then go in from the
+    /// back ([`merge_from_back`]).
     fn merge(
         &mut self,
         (s, e): (usize, usize),
@@ -1064,24 +1075,29 @@ impl<'s, 'a> Builder<'s, 'a> {
     ) {
         let (lat, rat) = at;
         let (l0, r0) = (*lat, *rat);
-        let (mut l, mut r) = (l0, r0);
-        for i in s..e {
-            let ev = self.events[i];
-            let side = self.flags[ev.prim()];
-            let (to_left, to_right) = (side == LEFT, side == RIGHT);
-            let dst = if to_left {
-                l
-            } else if to_right {
-                r
-            } else {
-                i
-            };
-            self.events[dst] = ev;
-            l += to_left as usize;
-            r += to_right as usize;
+        // The outputs lie after every input: read below `e`, write above,
+        // and below the limit only (the room past it may hold a job's copy
+        // of its events).
+        let (inputs, outputs) = self.events.split_at_mut(e);
+        let outputs = &mut outputs[..self.event_limit - e];
+        let (mut l, mut r) = (l0 - e, r0 - e);
+        for &ev in &inputs[s..] {
+            // The side's bits are the cursors' steps (classification wrote
+            // every flag this node's events name: LEFT, RIGHT or BOTH).
+            let side = self.flags[ev.prim()] as usize;
+            let (to_left, to_right) = (side & LEFT as usize, side >> 1);
+            // A dropped event is stored at the right cursor, which does not
+            // move: the next right event, or the merge, writes over it.
+            let dst = if to_left != 0 { l } else { r };
+            debug_assert!(dst < outputs.len() || side == BOTH as usize);
+            if let Some(slot) = outputs.get_mut(dst) {
+                *slot = ev;
+            }
+            l += to_left;
+            r += to_right;
         }
-        *lat = merge_from_back(self.events, l0, l, left_new);
-        *rat = merge_from_back(self.events, r0, r, right_new);
+        *lat = merge_from_back(self.events, l0, l + e, left_new);
+        *rat = merge_from_back(self.events, r0, r + e, right_new);
     }
 }
 
