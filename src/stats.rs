@@ -38,19 +38,21 @@ pub struct TraceStats {
 }
 
 impl TraceStats {
-    /// Adds another call's counts to these.
+    /// Adds another call's counts to these, modulo 2^64: the sums may
+    /// start from any bits (a C tracer keeps them in caller memory), and no
+    /// build's overflow checks may panic on them.
     pub fn add(&mut self, o: &TraceStats) {
-        self.rays += o.rays;
-        self.traversal_steps += o.traversal_steps;
-        self.interior_steps += o.interior_steps;
-        self.leaf_steps += o.leaf_steps;
-        self.empty_leaf_steps += o.empty_leaf_steps;
-        self.prim_tests += o.prim_tests;
-        self.box_tests += o.box_tests;
-        self.box_cost += o.box_cost;
-        self.prim_cost += o.prim_cost;
-        self.rect_tests += o.rect_tests;
-        self.faults += o.faults;
+        self.rays = self.rays.wrapping_add(o.rays);
+        self.traversal_steps = self.traversal_steps.wrapping_add(o.traversal_steps);
+        self.interior_steps = self.interior_steps.wrapping_add(o.interior_steps);
+        self.leaf_steps = self.leaf_steps.wrapping_add(o.leaf_steps);
+        self.empty_leaf_steps = self.empty_leaf_steps.wrapping_add(o.empty_leaf_steps);
+        self.prim_tests = self.prim_tests.wrapping_add(o.prim_tests);
+        self.box_tests = self.box_tests.wrapping_add(o.box_tests);
+        self.box_cost = self.box_cost.wrapping_add(o.box_cost);
+        self.prim_cost = self.prim_cost.wrapping_add(o.prim_cost);
+        self.rect_tests = self.rect_tests.wrapping_add(o.rect_tests);
+        self.faults = self.faults.wrapping_add(o.faults);
     }
 
     /// Traversal steps per ray (TSPR).

@@ -1819,3 +1819,52 @@ fn kd_cost_reference_out_of_range_is_refused() {
         assert_eq!(got, want, "cost_reference {cost}");
     }
 }
+
+/// A tracer's running statistics are caller memory the check word does not
+/// cover: any bits there are counts, and a call adds its own to them modulo
+/// 2^64, whatever the build's overflow checks (a sum that overflowed once
+/// panicked in builds with them, and the call answered
+/// `CORAY_STATUS_INTERNAL_ERROR`).
+#[test]
+fn a_tracers_totals_wrap_whatever_they_hold() {
+    let f = floor();
+    let s = scene(&f);
+    let (_arena, t) = kd(&s);
+    let mut stack = arena(KD_STACK);
+    let sp: *mut c_void = stack.as_mut_ptr().cast();
+    let mut tr = CorayTracer { opaque: [0; 32] };
+    let ray = down();
+    let mut first = CorayHit::default();
+    let mut again = CorayHit::default();
+    let mut st = CorayTraceStats {
+        struct_size: size_of::<CorayTraceStats>(),
+        ..Default::default()
+    };
+    // SAFETY: the handle, stack, tracer, ray and hits are live locals; the
+    // tracer is made by its make call, then only its statistics' words
+    // (those past the binding's 14) are overwritten.
+    unsafe {
+        let hier = CORAY_TRAVERSAL_HIERARCHICAL;
+        assert_eq!(
+            coray_kdtree_tracer(&t, hier, sp, KD_STACK, &mut tr),
+            CorayStatus::Ok
+        );
+        assert_eq!(
+            coray_kdtree_tracer_intersect1(&mut tr, &ray, &mut first),
+            CorayStatus::Ok
+        );
+        assert!(first.t.is_finite(), "the ray hits the floor");
+        for w in &mut tr.opaque[14..] {
+            *w = u64::MAX;
+        }
+        assert_eq!(
+            coray_kdtree_tracer_intersect1(&mut tr, &ray, &mut again),
+            CorayStatus::Ok
+        );
+        assert_eq!(again.t.to_bits(), first.t.to_bits());
+        assert_eq!(coray_tracer_stats(&tr, &mut st), CorayStatus::Ok);
+    }
+    // u64::MAX and the call's one ray: 0.
+    assert_eq!(st.rays, 0);
+    assert!(st.traversal_steps < 64, "{}", st.traversal_steps);
+}
