@@ -203,12 +203,15 @@ pub fn build_begin_for_threads<'s, 'a>(
                 task = next;
             }
             None => {
-                // Park the job's events at the top of the free room.
-                let total = task.total();
-                let at = b.event_limit - total;
-                b.events.copy_within(task.start..task.start + total, at);
-                b.event_limit = at;
-                task.start = at;
+                // Park the job's events at the top of the free room; the
+                // root as the only job (one thread) keeps them in place.
+                if task.depth > 0 {
+                    let total = task.total();
+                    let at = b.event_limit - total;
+                    b.events.copy_within(task.start..task.start + total, at);
+                    b.event_limit = at;
+                    task.start = at;
+                }
                 // Marks the job's root: a leaf whose first reference is the job.
                 b.nodes[task.node as usize] = KdNode::leaf(count as u32, 0);
                 specs[count].task = task;
@@ -271,13 +274,17 @@ impl Shares {
 /// moves them to its start, with a copy at its end when every region has
 /// room for both. Regions are laid from the top down, job 0 highest; the
 /// jobs were parked from the top down too, so moving them in reverse
-/// order only ever writes below every event still to move.
+/// order only ever writes below every event still to move. A build of one
+/// job (the root, left in place) gets no copy: a rerun would have no more
+/// room than the run (`finish` builds in one pass instead), so its events
+/// are not moved at all (a one-thread SPD mount build: 3 copies of its
+/// 49,152 root events fewer, 1.2% of its instructions).
 fn place_events(events: &mut [KdEvent], specs: &mut [JobSpec]) {
     let room = events.len();
     let parked: usize = specs.iter().map(|s| s.task.total()).sum();
     // Each region is at least its events (room >= parked), at least twice
     // them when room >= 2 parked.
-    let copy = room >= 2 * parked;
+    let copy = specs.len() > 1 && room >= 2 * parked;
     let shares = Shares::new(room, specs, |s| s.task.total());
     let mut end = room;
     for s in specs.iter_mut() {
@@ -295,7 +302,7 @@ fn place_events(events: &mut [KdEvent], specs: &mut [JobSpec]) {
             let at = s.events.end() - n;
             events.copy_within(from..from + n, at);
             events.copy_within(at..at + n, s.events.start);
-        } else {
+        } else if from != s.events.start {
             events.copy_within(from..from + n, s.events.start);
         }
         s.task.start = 0;
