@@ -130,6 +130,16 @@ struct Builder<'t, 'b, 'r> {
     last_empty: bool,
     /// An entry did not fit: the cut is incomplete and must not be used.
     full: bool,
+    /// Nodes visited by the walks.
+    walks: u64,
+    /// The first record of the first ray that the current parent entry's
+    /// walk has not read: a walk reads the records in preorder, so a
+    /// position below it is read a second time, which only histories that
+    /// do not match the tree (a corrupt tree's, or lengths left partial)
+    /// lead to. Such a node is emitted instead of refined: without this,
+    /// two children sent to overlapping records doubled the visits at
+    /// every level (2^depth on a tree that is its own child).
+    unread: u32,
 }
 
 /// Builds the HLCTS of a shaft whose boundary rays are `rays` (at most
@@ -144,6 +154,16 @@ pub fn build<'b>(
     rays: &[Boundary],
     entries: &'b mut [HlctsEntry],
 ) -> Hlcts<'b> {
+    build_counted(tree, parent, rays, entries).0
+}
+
+/// [`build`], and how many nodes its walks visited.
+fn build_counted<'b>(
+    tree: &KdTree,
+    parent: &[HlctsEntry],
+    rays: &[Boundary],
+    entries: &'b mut [HlctsEntry],
+) -> (Hlcts<'b>, u64) {
     let mut b = Builder {
         tree,
         rays: &rays[..rays.len().min(MAX_RAYS)],
@@ -155,6 +175,8 @@ pub fn build<'b>(
         },
         last_empty: false,
         full: false,
+        walks: 0,
+        unread: 0,
     };
     for refine in [true, false] {
         b.out.len = 0;
@@ -176,6 +198,7 @@ pub fn build<'b>(
             if pe.flags & ENTRY_EMPTY_RUN != 0 || !refine {
                 b.push(pe.node, pe.flags, &bx, pos);
             } else {
+                b.unread = 0;
                 b.walk(pe.node, bx, pos, 0);
             }
         }
@@ -195,7 +218,7 @@ pub fn build<'b>(
         .take_while(|e| tree.node(e.node).is_leaf())
         .count();
     b.out.termination = termination_object(tree, &b.out, rays);
-    b.out
+    (b.out, b.walks)
 }
 
 impl Builder<'_, '_, '_> {
@@ -207,6 +230,7 @@ impl Builder<'_, '_, '_> {
     }
 
     fn walk(&mut self, node: u32, bx: Aabb, pos: [u32; MAX_RAYS], depth: u32) {
+        self.walks += 1;
         let k = self.rays.len();
         let kind = self.kind(0, pos[0]);
         // Equal decisions carry over to the rays between only when the
@@ -217,6 +241,7 @@ impl Builder<'_, '_, '_> {
         // leaving through opposite faces before the split can straddle one
         // that crosses it.)
         let alike = kind < 4
+            && pos[0] >= self.unread
             && depth <= crate::kd::KD_MAX_DEPTH
             && (1..k).all(|j| self.kind(j, pos[j]) == kind)
             && {
@@ -233,6 +258,8 @@ impl Builder<'_, '_, '_> {
             self.emit(node, &bx, pos);
             return;
         }
+        // `kind < 4`: the record lies in the history, below `u32::MAX`.
+        self.unread = pos[0] + 1;
         let (a, s, left) = (nd.axis(), nd.split(), nd.left());
         let mut lb = bx;
         lb.max[a] = s;
@@ -553,4 +580,48 @@ pub fn trace_guided(
         }
     };
     guide::finish(tree, &mut v, done, stack, steps, stats)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kd::KdInfo;
+
+    /// A corrupt tree whose interior nodes are their own children, under
+    /// histories that say "both children" at every record with no subtree
+    /// lengths filled in (what a ray's traversal of such a tree records
+    /// when its history runs out): the walks must read each record of the
+    /// first ray once, so that their visits stay linear in the history.
+    #[test]
+    fn a_cut_over_a_cyclic_tree_reads_each_record_once() {
+        let nodes = [KdNode::interior(0, 0.0, 1); 3];
+        let info = KdInfo {
+            node_count: 3,
+            bounds_min: [-1.0; 3],
+            bounds_max: [1.0; 3],
+            ..KdInfo::default()
+        };
+        let tree =
+            KdTree::from_checked_parts(crate::Scene::default(), &info, &nodes, &[], &[], &[]);
+        const N: usize = 30;
+        let mut records = [HistoryRecord::default(); N];
+        for (i, r) in records.iter_mut().enumerate() {
+            // Decision 2 (both children), subtree length 1.
+            *r = HistoryRecord {
+                node: if i == 0 { 0 } else { 1 + (i % 2) as u32 },
+                word: 2 | 1 << 3,
+            };
+        }
+        let ray = Ray::new(Vec3::new(-2.0, 0.5, 0.5), Vec3::X, 0.0, f32::INFINITY);
+        let rays: [Boundary; 4] = core::array::from_fn(|j| Boundary {
+            ray,
+            records: Some(&records),
+            source: Source::Parent(j),
+            hit: Hit::MISS,
+        });
+        let parent = [root_entry(&tree)];
+        let mut entries = [HlctsEntry::default(); 64];
+        let (_, walks) = build_counted(&tree, &parent, &rays, &mut entries);
+        assert!(walks <= 2 * N as u64 + 2, "{walks} visits over {N} records");
+    }
 }
