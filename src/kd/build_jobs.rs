@@ -277,8 +277,8 @@ impl Shares {
 /// order only ever writes below every event still to move. A build of one
 /// job (the root, left in place) gets no copy: a rerun would have no more
 /// room than the run (`finish` builds in one pass instead), so its events
-/// are not moved at all (a one-thread SPD mount build: 3 copies of its
-/// 49,152 root events fewer, 1.2% of its instructions).
+/// are not moved at all (three copies of every root event fewer: a
+/// one-thread SPD mount build 1.0% fewer instructions, callgrind).
 fn place_events(events: &mut [KdEvent], specs: &mut [JobSpec]) {
     let room = events.len();
     let parked: usize = specs.iter().map(|s| s.task.total()).sum();
