@@ -46,7 +46,9 @@ pub(crate) unsafe fn one_ray<'a, S, I: Plain, O>(
 ) -> Result<(), CorayStatus> {
     // SAFETY: forwarded caller contract for every pointer; each is checked
     // (null, alignment, size) before it is read or viewed, and nothing is
-    // written before the overlap check below.
+    // written before the overlap check below. The ray is borrowed, not
+    // copied (`abi::core_ray` says why): no buffer the call writes meets it
+    // (that check).
     let (h, scene, s, r, stk, stats) = unsafe {
         let h = handle::read_unnoted(handle, kind)?;
         let scene = h.scene();
@@ -56,7 +58,7 @@ pub(crate) unsafe fn one_ray<'a, S, I: Plain, O>(
         let need = stack_len(&s);
         let stk = carve::stack_unnoted::<I>(stack, stack_bytes, need)?;
         let stats = Out::open(stats, true)?;
-        (h, scene, s, ray.read(), stk, stats)
+        (h, scene, s, crate::abi::core_ray(&*ray), stk, stats)
     };
     let [handle_words, arena] = h.spans();
     let [vertices, triangles, spheres, cones] = Span::of_scene(&scene);
@@ -81,7 +83,7 @@ pub(crate) unsafe fn one_ray<'a, S, I: Plain, O>(
         return Err(CorayStatus::InvalidParameter);
     }
     let mut st = TraceStats::default();
-    let o = answer(&s, &coray::Ray::from(&r), stk, &mut st)?;
+    let o = answer(&s, r, stk, &mut st)?;
     if st.faults > 0 {
         return Err(CorayStatus::CorruptArena);
     }

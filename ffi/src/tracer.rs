@@ -331,10 +331,12 @@ pub(crate) unsafe fn trace<'a, S, I: Plain, O>(
     // and `out` meet it nowhere (checked above); the calling thread owns it
     // (contract).
     let stk: &mut [I] = unsafe { carve::arena_mut(b.stack as *mut u8, 0, need) };
-    // SAFETY: checked non-null and aligned, readable (contract).
-    let ray = coray::Ray::from(&unsafe { ray.read() });
+    // SAFETY: checked non-null and aligned, readable (contract), and
+    // written by nothing during the call (it meets neither the stack, the
+    // tracer nor `out`: checked above).
+    let ray = crate::abi::core_ray(unsafe { &*ray });
     let mut st = TraceStats::default();
-    let answer = answer(&s, b.mode, &ray, stk, &mut st)?;
+    let answer = answer(&s, b.mode, ray, stk, &mut st)?;
     if st.faults > 0 {
         return Err(CorayStatus::CorruptArena);
     }

@@ -79,7 +79,7 @@ impl Aabb {
     /// slabs go at once on SIMD lanes: the same products, the same
     /// comparisons and the same extremes as one axis after the other
     /// (`tests::clip_ray_is_the_slab_test_axis_by_axis`).
-    #[inline]
+    #[inline(always)]
     pub fn clip_ray(
         &self,
         origin: Vec3,

@@ -38,7 +38,7 @@ impl Ray {
     /// 0.0` is a zero for finite `x` and NaN for an infinite or NaN one, so
     /// one sum of the six products is zero exactly when all six components
     /// are finite; `t_min <= t_max` is false when either is NaN.
-    #[inline]
+    #[inline(always)]
     pub fn is_valid(&self) -> bool {
         let (o, d) = (self.origin, self.dir);
         let zeros = (o.x * 0.0 + o.y * 0.0) + (o.z * 0.0 + d.x * 0.0) + (d.y * 0.0 + d.z * 0.0);
