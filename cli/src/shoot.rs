@@ -246,15 +246,21 @@ impl<'a, T: CStructure + Sync> Shooter for CShooter<'a, T> {
         rays: &[Ray],
         out: &mut [Hit],
         ctx: &mut Self::Ctx,
-        st: &mut TraceStats,
+        _: &mut TraceStats,
     ) {
         if self.calls == CCalls::Arrays {
             self.structure
                 .intersect(rays, out, &mut ctx.stack)
                 .expect("valid call");
         } else {
+            // Each hit written in place, as a C caller's buffer gets it
+            // (`CTracer::intersect1_into` says why).
             for (r, h) in rays.iter().zip(out.iter_mut()) {
-                *h = self.intersect(r, ctx, st);
+                match &mut ctx.tracer {
+                    Some(t) => t.intersect1_into(r, h),
+                    None => self.structure.intersect1_into(r, h, &mut ctx.stack),
+                }
+                .expect("valid call");
             }
         }
     }

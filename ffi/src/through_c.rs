@@ -103,21 +103,30 @@ impl<F: TracerCalls> CTracer<'_, F> {
 
     /// The closest hit of `ray` by one `_tracer_intersect1` call.
     pub fn intersect1(&mut self, ray: &Ray) -> Result<Hit, CorayStatus> {
-        let mut hit = core::mem::MaybeUninit::<Hit>::uninit();
+        let mut hit = Hit::MISS;
+        self.intersect1_into(ray, &mut hit).map(|()| hit)
+    }
+
+    /// The closest hit of `ray` by one `_tracer_intersect1` call, written
+    /// into `hit`, as a C caller traces into its own hit buffer (on an
+    /// error `hit` is unchanged). A caller that reads the hit back whole
+    /// right after the call waits on the store (its loads span the call's
+    /// stores): about a third of a missing ray's call on x86-64, so `coray
+    /// bench` writes in place, as the array calls do.
+    pub fn intersect1_into(&mut self, ray: &Ray, hit: &mut Hit) -> Result<(), CorayStatus> {
         // SAFETY: the tracer was made on a structure borrowed for 't (its
         // handle, arena and scene in place) with the stack owned here, by
         // the family whose call this is; Ray and CorayRay, Hit and
-        // CorayHit share their layout (abi.rs); the hit is a local, written
-        // whole when the call succeeds.
+        // CorayHit share their layout (abi.rs); `hit` is a unique borrow,
+        // written whole when the call succeeds.
         let s = unsafe {
             F::intersect1(
                 &mut *self.tracer,
                 (ray as *const Ray).cast(),
-                hit.as_mut_ptr().cast(),
+                (hit as *mut Hit).cast(),
             )
         };
-        // SAFETY: on success the call wrote the hit.
-        status(s).map(|()| unsafe { hit.assume_init() })
+        status(s)
     }
 
     /// Whether something blocks `ray`, by one `_tracer_occluded1` call.
@@ -259,7 +268,18 @@ pub trait CStructure {
     fn occluded(&self, rays: &[Ray], out: &mut [u8], stack: &mut [u128])
         -> Result<(), CorayStatus>;
     /// The closest hit of one ray, one call with the handle.
-    fn intersect1(&self, ray: &Ray, stack: &mut [u128]) -> Result<Hit, CorayStatus>;
+    fn intersect1(&self, ray: &Ray, stack: &mut [u128]) -> Result<Hit, CorayStatus> {
+        let mut hit = Hit::MISS;
+        self.intersect1_into(ray, &mut hit, stack).map(|()| hit)
+    }
+    /// The closest hit of one ray, one call with the handle, written into
+    /// `hit` (unchanged on an error; see [`CTracer::intersect1_into`]).
+    fn intersect1_into(
+        &self,
+        ray: &Ray,
+        hit: &mut Hit,
+        stack: &mut [u128],
+    ) -> Result<(), CorayStatus>;
     /// Whether something blocks one ray, one call with the handle.
     fn occluded1(&self, ray: &Ray, stack: &mut [u128]) -> Result<bool, CorayStatus>;
 }
@@ -335,21 +355,25 @@ impl CStructure for CKdTree<'_> {
     }
 
     /// By one `coray_kdtree_intersect1` call.
-    fn intersect1(&self, ray: &Ray, stack: &mut [u128]) -> Result<Hit, CorayStatus> {
-        let mut hit = Hit::MISS;
-        // SAFETY: as in `intersect`, for one ray and one hit (a local).
-        let s = unsafe {
+    fn intersect1_into(
+        &self,
+        ray: &Ray,
+        hit: &mut Hit,
+        stack: &mut [u128],
+    ) -> Result<(), CorayStatus> {
+        // SAFETY: as in `intersect`, for one ray and one hit (a unique
+        // borrow).
+        status(unsafe {
             coray_kdtree_intersect1(
                 &self.handle,
                 self.traversal,
                 (ray as *const Ray).cast(),
-                (&mut hit as *mut Hit).cast(),
+                (hit as *mut Hit).cast(),
                 stack.as_mut_ptr().cast(),
                 size_of_val(stack),
                 core::ptr::null_mut(),
             )
-        };
-        status(s).map(|()| hit)
+        })
     }
 
     /// By one `coray_kdtree_occluded1` call.
@@ -434,20 +458,24 @@ impl CStructure for CWide<'_> {
     }
 
     /// By one `coray_wide_intersect1` call.
-    fn intersect1(&self, ray: &Ray, stack: &mut [u128]) -> Result<Hit, CorayStatus> {
-        let mut hit = Hit::MISS;
-        // SAFETY: as in `intersect`, for one ray and one hit (a local).
-        let s = unsafe {
+    fn intersect1_into(
+        &self,
+        ray: &Ray,
+        hit: &mut Hit,
+        stack: &mut [u128],
+    ) -> Result<(), CorayStatus> {
+        // SAFETY: as in `intersect`, for one ray and one hit (a unique
+        // borrow).
+        status(unsafe {
             coray_wide_intersect1(
                 &self.handle,
                 (ray as *const Ray).cast(),
-                (&mut hit as *mut Hit).cast(),
+                (hit as *mut Hit).cast(),
                 stack.as_mut_ptr().cast(),
                 size_of_val(stack),
                 core::ptr::null_mut(),
             )
-        };
-        status(s).map(|()| hit)
+        })
     }
 
     /// By one `coray_wide_occluded1` call.
