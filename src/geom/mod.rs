@@ -10,7 +10,7 @@ mod scene;
 mod sphere;
 mod triangle;
 
-pub use aabb::Aabb;
+pub use aabb::{Aabb, ClipBox};
 pub use camera::Camera;
 pub use cone::Cone;
 pub use glam::Vec3;

@@ -13,7 +13,7 @@ use super::node::{
     KD_VERSION, SHARED_EMPTY,
 };
 use super::{min_requirements, ropes, KdParams, KdScratch, KdStorage, KdTree};
-use crate::geom::{Aabb, Scene};
+use crate::geom::{Aabb, ClipBox, Scene};
 use crate::limits::KD_MAX_NODES;
 use crate::Error;
 
@@ -447,7 +447,7 @@ impl Made {
         KdTree {
             scene: *scene,
             info,
-            trace_box: info.trace_bounds(),
+            trace_box: ClipBox::of(&info.trace_bounds()),
             nodes,
             ropes,
             rope_ids,

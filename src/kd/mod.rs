@@ -30,7 +30,7 @@ pub use packet::LANES as PACKET_LANES;
 pub use traverse::{Decision, Traversal};
 pub use validate::KdTreeStats;
 
-use crate::geom::Aabb;
+use crate::geom::{Aabb, ClipBox};
 use crate::{Error, Scene};
 
 /// How a build decides where to stop, and what its SAH costs are.
@@ -321,8 +321,8 @@ pub struct KdTree<'a> {
     pub(crate) scene: Scene<'a>,
     pub(crate) info: KdInfo,
     /// `info.trace_bounds()`, computed once: the box every ray is clipped
-    /// to before it walks.
-    pub(crate) trace_box: Aabb,
+    /// to before it walks (with SIMD-width corners: [`ClipBox`] says why).
+    pub(crate) trace_box: ClipBox,
     /// `info.node_count` nodes; node 0 is the root.
     pub(crate) nodes: &'a [KdNode],
     /// `info.rope_count()` rope records: one per leaf, or none.
@@ -412,7 +412,7 @@ impl<'a> KdTree<'a> {
         KdTree {
             scene,
             info: *info,
-            trace_box,
+            trace_box: ClipBox::of(&trace_box),
             nodes,
             ropes,
             rope_ids,

@@ -802,7 +802,7 @@ impl KdTree<'_> {
         steps: &mut Steps,
         lane_steps: &mut [u32; LANES],
     ) {
-        let (mut tn, mut tf, hit_box) = p.segment(&self.trace_box);
+        let (mut tn, mut tf, hit_box) = p.segment(&self.trace_box.aabb());
         let mut alive = hit_box.count();
         if alive == 0 {
             return;

@@ -90,7 +90,7 @@ impl Hlcts<'_> {
 /// The entry that starts every traversal: the root, whose record is the
 /// first of every history traced from the root.
 pub fn root_entry(tree: &KdTree) -> HlctsEntry {
-    let b = tree.trace_box;
+    let b = tree.trace_box.aabb();
     HlctsEntry {
         node: 0,
         flags: 0,
@@ -210,7 +210,7 @@ fn build_counted<'b>(
         // Not even the parent's cut fits: share nothing below the root.
         b.out.len = 0;
         b.full = false;
-        b.push(0, 0, &tree.trace_box, [NONE; MAX_RAYS]);
+        b.push(0, 0, &tree.trace_box.aabb(), [NONE; MAX_RAYS]);
     }
     let n = b.out.len;
     b.out.leading_leaves = b.out.entries[..n]

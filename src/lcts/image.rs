@@ -484,7 +484,7 @@ pub fn cast_rect_with_by<K: Kernel>(
             let (seq_buf, path_buf) = scratch
                 .entries
                 .split_at_mut(scratch.entries.len() / (1 + CORNERS));
-            let screen = ScreenBox::new(camera, (f, r, u), &tree.trace_box, origin);
+            let screen = ScreenBox::new(camera, (f, r, u), &tree.trace_box.aabb(), origin);
             let mut hist_lens_top = HistRow { info: ct };
             let mut hist_lens_bottom = HistRow { info: cb };
             let corner_rows = if m == 1 {
@@ -1159,7 +1159,7 @@ fn cast_bisection<K: Kernel>(
         camera,
         basis: camera.basis(),
         origin,
-        screen: ScreenBox::new(camera, camera.basis(), &tree.trace_box, origin),
+        screen: ScreenBox::new(camera, camera.basis(), &tree.trace_box.aabb(), origin),
         cap,
         per_cut,
         leaf_pixels: LEAF_PIXELS,

@@ -230,7 +230,7 @@ fn trace_packet(
     stack: &mut [KdStackItem],
     stats: &mut TraceStats,
 ) -> Option<()> {
-    let (_, t1, mut on) = p.segment(&tree.trace_box);
+    let (_, t1, mut on) = p.segment(&tree.trace_box.aabb());
     let mut v = ClosestLanes::new(p);
     let mut steps = Steps::default();
     let mut cursors = [Cursor::new(paths, 0); LANES];
