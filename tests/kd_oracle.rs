@@ -3,6 +3,7 @@
 mod common;
 
 use common::*;
+use coray::geom::ClipBox;
 use coray::kd::{self, KdInfo, KdParams, KdTree, KdTreeStats, Traversal};
 use coray::{oracle, Accel, Cone, Hit, Ray, Sphere, TraceStats, Vec3};
 
@@ -44,9 +45,53 @@ fn check_all(tree: &KdTree, rays: &[Ray], what: &str) -> usize {
             assert_eq!(any, want_any, "{what}: ray {i} {ray:?} {m:?} occluded");
             assert_eq!(st.rays, 2);
             assert_eq!(st.traversal_steps, st.interior_steps + st.leaf_steps);
+            // A C tracer answers by `misses_trace_box` without the tree:
+            // it must say exactly when the traversal does not walk.
+            assert_eq!(
+                misses_box(tree, ray),
+                st.traversal_steps == 0,
+                "{what}: ray {i} {ray:?} {m:?}: misses_trace_box against the walk ({st:?})"
+            );
         }
     }
     hits
+}
+
+/// [`kd::misses_trace_box`] on `tree`'s trace box, as a C tracer asks it.
+fn misses_box(tree: &KdTree, ray: &Ray) -> bool {
+    kd::misses_trace_box(&ClipBox::of(&tree.info().trace_bounds()), ray)
+}
+
+/// Rays inside and outside the trace box, invalid ones among them, and
+/// rays along its faces: `misses_trace_box` is true exactly for those the
+/// traversals answer without a step (`check_all` compares every ray), and
+/// both kinds occur.
+#[test]
+fn trace_box_misses_are_the_traversals_own() {
+    let mut rng = Rng(7);
+    let o = random_scene(&mut rng, 300, 30, 10, 10.0);
+    let mut rays = random_rays(&mut rng, 2000, 10.0);
+    let (_, face_rays) = faces_and_tiny_directions();
+    rays.extend(face_rays);
+    // Rays that leave the scene, and rays that end before they reach it.
+    for _ in 0..300 {
+        let o = rng.unit() * 30.0;
+        rays.push(Ray::new(o, o + rng.vec(-1.0, 1.0), 0.0, f32::INFINITY));
+        rays.push(Ray::new(o, rng.vec(-10.0, 10.0) - o, 0.0, 0.1));
+    }
+    rays.push(Ray::new(Vec3::ZERO, Vec3::ZERO, 0.0, 1.0));
+    rays.push(Ray::new(Vec3::splat(f32::NAN), Vec3::X, 0.0, 1.0));
+    rays.push(Ray::new(Vec3::ZERO, Vec3::X, 2.0, 1.0));
+    check_scene(&o, &rays, "trace box");
+    let scene = o.scene();
+    let (req, mut b) = ideal_storage(&scene, &KdParams::auto());
+    let tree = build_with(&scene, &KdParams::auto(), &req, &mut b);
+    let outside = rays.iter().filter(|r| misses_box(&tree, r)).count();
+    assert!(
+        outside > 100 && outside < rays.len() - 100,
+        "{outside} of {}",
+        rays.len()
+    );
 }
 
 fn check_scene(o: &OwnedScene, rays: &[Ray], what: &str) -> usize {

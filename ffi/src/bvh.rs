@@ -981,6 +981,7 @@ unsafe fn traced<O>(
             |x| x.stack_len(),
             ray,
             out,
+            |_, _, _| None,
             #[inline(always)]
             |x, _, r, s, st| Ok(answer(x, r, s, st)),
         )

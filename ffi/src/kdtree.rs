@@ -983,7 +983,10 @@ pub unsafe extern "C" fn coray_kdtree_tracer(
 }
 
 /// `coray_kdtree_tracer_intersect1` and `_occluded1`: `answer` for the
-/// ray, by the tracer's traversal.
+/// ray, by the tracer's traversal, or `missed` for a ray that misses the
+/// tree's box (`kd::misses_trace_box`, the traversal's own first test,
+/// asked before the tree's view is rebuilt: a missing ray's call costs
+/// the checks and the clip).
 ///
 /// Safety: as `coray_kdtree_tracer_intersect1`, with `out` one writable `O`.
 #[inline(always)]
@@ -991,6 +994,7 @@ unsafe fn traced<O>(
     tracer: *mut CorayTracer,
     ray: *const CorayRay,
     out: *mut O,
+    missed: O,
     answer: impl FnOnce(&KdTree, &coray::Ray, Traversal, &mut [KdStackItem], &mut TraceStats) -> O,
 ) -> Result<(), CorayStatus> {
     // SAFETY: forwarded caller contract.
@@ -1004,6 +1008,14 @@ unsafe fn traced<O>(
             |_| KD_STACK_LEN,
             ray,
             out,
+            #[inline(always)]
+            |hint, r, st| {
+                let outside =
+                    kd::misses_trace_box(&coray::geom::ClipBox::of(&box_of_words(hint)), r);
+                // As the traversal counts a ray it does not walk.
+                st.rays += u64::from(outside);
+                outside.then_some(missed)
+            },
             #[inline(always)]
             |t, m, r, s, st| Ok(answer(t, r, traversal(m as CorayTraversal)?, s, st)),
         )
@@ -1036,6 +1048,7 @@ pub unsafe extern "C" fn coray_kdtree_tracer_intersect1(
                 tracer,
                 ray,
                 hit,
+                coray::Hit::MISS.into(),
                 #[inline(always)]
                 |t, r, m, s, st| KdTree::intersect(t, r, m, s, st).into(),
             )
@@ -1062,6 +1075,7 @@ pub unsafe extern "C" fn coray_kdtree_tracer_occluded1(
                 tracer,
                 ray,
                 occluded,
+                0,
                 #[inline(always)]
                 |t, r, m, s, st| KdTree::occluded(t, r, m, s, st) as u8,
             )

@@ -991,6 +991,7 @@ unsafe fn traced<O>(
             |p| p.stack_len(),
             ray,
             out,
+            |_, _, _| None,
             #[inline(always)]
             |p, m, r, s, st| {
                 let sc = scheme(m as CorayProjScheme)?;

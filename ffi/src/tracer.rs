@@ -246,10 +246,13 @@ unsafe fn binding(tracer: *const CorayTracer, kind: Option<u64>) -> Result<Bindi
 /// tracer, each other) nor `out` one it reads (handle, arena, scene
 /// arrays): places inside the ranges the last such check found are taken
 /// as they are, others are checked and the ranges found again. Then
+/// `early`, given the hint words the make call kept: an answer the family
+/// knows without its structure (a kd-tree's for a ray that misses its box,
+/// counted as its traversal counts it) is written as it is. Otherwise
 /// `view`'s view of the structure (checked when the tracer was made; given
-/// the hint words the make call kept), its
-/// stack need (at most the tracer's stack), and `answer`; a fault it meets
-/// gives `CORAY_STATUS_CORRUPT_ARENA` and nothing is written.
+/// the hint words), its stack need (at most the tracer's stack), and
+/// `answer`; a fault it meets gives `CORAY_STATUS_CORRUPT_ARENA` and
+/// nothing is written.
 ///
 /// # Safety
 /// `tracer` is NULL or points to a writable tracer that no other thread
@@ -264,6 +267,7 @@ pub(crate) unsafe fn trace<'a, S, I: Plain, O>(
     stack_len: impl FnOnce(&S) -> usize,
     ray: *const CorayRay,
     out: *mut O,
+    early: impl FnOnce([u64; HINT_WORDS], &coray::Ray, &mut TraceStats) -> Option<O>,
     answer: impl FnOnce(&S, u64, &coray::Ray, &mut [I], &mut TraceStats) -> Result<O, CorayStatus>,
 ) -> Result<(), CorayStatus> {
     // SAFETY: forwarded contract (`tracer` NULL or readable).
@@ -318,28 +322,34 @@ pub(crate) unsafe fn trace<'a, S, I: Plain, O>(
         b.ray = starts_in_gap(r, rb, &[stack, own]);
         b.check = b.check_of(tracer as usize);
     }
-    // SAFETY: the arena's header and parts passed `view`'s checks when the
-    // tracer was made and are unchanged (contract).
-    let s = view(h, scene, b.hint)?;
-    let need = stack_len(&s);
-    if need > b.stack_bytes / size_of::<I>() {
-        return Err(CorayStatus::ArenaTooSmall);
-    }
-    // SAFETY: the make call checked the stack non-null, 16-aligned,
-    // `stack_bytes` long (`need` items fit, just checked) and disjoint from
-    // every buffer read (handle, arena, scene) and from the tracer; `ray`
-    // and `out` meet it nowhere (checked above); the calling thread owns it
-    // (contract).
-    let stk: &mut [I] = unsafe { carve::arena_mut(b.stack as *mut u8, 0, need) };
     // SAFETY: checked non-null and aligned, readable (contract), and
     // written by nothing during the call (it meets neither the stack, the
     // tracer nor `out`: checked above).
     let ray = crate::abi::core_ray(unsafe { &*ray });
     let mut st = TraceStats::default();
-    let answer = answer(&s, b.mode, ray, stk, &mut st)?;
-    if st.faults > 0 {
-        return Err(CorayStatus::CorruptArena);
-    }
+    let answer = match early(b.hint, ray, &mut st) {
+        Some(a) => a,
+        None => {
+            // SAFETY: the arena's header and parts passed `view`'s checks
+            // when the tracer was made and are unchanged (contract).
+            let s = view(h, scene, b.hint)?;
+            let need = stack_len(&s);
+            if need > b.stack_bytes / size_of::<I>() {
+                return Err(CorayStatus::ArenaTooSmall);
+            }
+            // SAFETY: the make call checked the stack non-null, 16-aligned,
+            // `stack_bytes` long (`need` items fit, just checked) and
+            // disjoint from every buffer read (handle, arena, scene) and
+            // from the tracer; `ray` and `out` meet it nowhere (checked
+            // above); the calling thread owns it (contract).
+            let stk: &mut [I] = unsafe { carve::arena_mut(b.stack as *mut u8, 0, need) };
+            let a = answer(&s, b.mode, ray, stk, &mut st)?;
+            if st.faults > 0 {
+                return Err(CorayStatus::CorruptArena);
+            }
+            a
+        }
+    };
     let totals = tracer
         .cast::<u64>()
         .wrapping_add(TOTALS_AT)

@@ -27,7 +27,7 @@ pub use node::{
     KD_MAGIC, KD_MAX_DEPTH, KD_STACK_LEN, KD_VERSION, MAX_CHILD_INDEX, NO_NODE, SHARED_EMPTY,
 };
 pub use packet::LANES as PACKET_LANES;
-pub use traverse::{Decision, Traversal};
+pub use traverse::{misses_trace_box, Decision, Traversal};
 pub use validate::KdTreeStats;
 
 use crate::geom::{Aabb, ClipBox};

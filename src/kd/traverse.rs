@@ -6,7 +6,7 @@
 use super::node::{KdNode, KdStackItem, KD_STACK_LEN, NO_NODE};
 use super::KdTree;
 use crate::geom::leaf::beats;
-use crate::geom::{Hit, PreparedRay, Ray, Scene, Vec3};
+use crate::geom::{ClipBox, Hit, PreparedRay, Ray, Scene, Vec3};
 use crate::limits::KD_MAX_DEPTH;
 use crate::TraceStats;
 
@@ -198,6 +198,25 @@ pub(crate) const ROPE_REACH: f32 = 256.0;
 /// Marks an exit point pushed only to end a segment that is then
 /// restarted (a ray lying in a split plane visits both children).
 const SKIP: u32 = NO_NODE - 1;
+
+/// Whether `ray` misses, without a walk, a tree whose trace box
+/// ([`super::KdInfo::trace_bounds`]) is `trace_box`: an invalid ray, or one
+/// that misses the box. [`KdTree::intersect`] answers such a ray with
+/// [`Hit::MISS`] and [`KdTree::occluded`] with false, counting only the
+/// ray, by this same test; a C tracer asks it before it rebuilds the
+/// tree's view (most of a missing ray's call).
+#[inline(always)]
+pub fn misses_trace_box(trace_box: &ClipBox, ray: &Ray) -> bool {
+    !ray.is_valid()
+        || trace_box
+            .clip_ray(
+                ray.origin,
+                crate::geom::inverse(ray.dir),
+                ray.t_min,
+                ray.t_max,
+            )
+            .is_none()
+}
 
 impl<'a> KdTree<'a> {
     /// Closest hit of `ray`, or [`Hit::MISS`], on the caller's `stack` of
