@@ -259,6 +259,7 @@ unsafe fn binding(tracer: *const CorayTracer, kind: Option<u64>) -> Result<Bindi
 /// uses during the call; its handle, arena, scene and stack are those of
 /// its make call, in place, and (but the stack) unchanged; `ray` is NULL
 /// or one readable ray, `out` NULL or one writable `O`.
+#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(crate) unsafe fn trace<'a, S, I: Plain, O>(
     tracer: *mut CorayTracer,
