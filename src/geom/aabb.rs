@@ -78,8 +78,10 @@ impl Aabb {
     /// Every traversal clips every ray to the scene's box, so the three
     /// slabs go at once on SIMD lanes: the same products, the same
     /// comparisons and the same extremes as one axis after the other
-    /// (`tests::clip_ray_is_the_slab_test_axis_by_axis`).
-    #[inline(always)]
+    /// (`tests::clip_ray_is_the_slab_test_axis_by_axis`). Inlined as
+    /// [`crate::Ray::is_valid`] is, for the same reason.
+    #[cfg_attr(target_arch = "x86_64", inline(always))]
+    #[cfg_attr(not(target_arch = "x86_64"), inline)]
     pub fn clip_ray(
         &self,
         origin: Vec3,
@@ -125,8 +127,9 @@ impl ClipBox {
         }
     }
 
-    /// [`Aabb::clip_ray`] on this box.
-    #[inline(always)]
+    /// [`Aabb::clip_ray`] on this box (inlined as it is).
+    #[cfg_attr(target_arch = "x86_64", inline(always))]
+    #[cfg_attr(not(target_arch = "x86_64"), inline)]
     pub fn clip_ray(
         &self,
         origin: Vec3,

@@ -38,7 +38,14 @@ impl Ray {
     /// 0.0` is a zero for finite `x` and NaN for an infinite or NaN one, so
     /// one sum of the six products is zero exactly when all six components
     /// are finite; `t_min <= t_max` is false when either is NaN.
-    #[inline(always)]
+    ///
+    /// Inlined into every walk on x86-64, where a call out of line read the
+    /// ray back across its stores and stalled (`docs/design.md`, "One ray
+    /// per call"); elsewhere left to the compiler: on the Cortex-M4
+    /// firmware inlining it and [`crate::Aabb::clip_ray`] everywhere cost
+    /// 5.2 KB of flash.
+    #[cfg_attr(target_arch = "x86_64", inline(always))]
+    #[cfg_attr(not(target_arch = "x86_64"), inline)]
     pub fn is_valid(&self) -> bool {
         let (o, d) = (self.origin, self.dir);
         let zeros = (o.x * 0.0 + o.y * 0.0) + (o.z * 0.0 + d.x * 0.0) + (d.y * 0.0 + d.z * 0.0);
