@@ -203,19 +203,27 @@ const SKIP: u32 = NO_NODE - 1;
 /// ([`super::KdInfo::trace_bounds`]) is `trace_box`: an invalid ray, or one
 /// that misses the box. [`KdTree::intersect`] answers such a ray with
 /// [`Hit::MISS`] and [`KdTree::occluded`] with false, counting only the
-/// ray, by this same test; a C tracer asks it before it rebuilds the
-/// tree's view (most of a missing ray's call).
+/// ray, by this same test (`trace_entry`); a C tracer asks it before it
+/// rebuilds the tree's view (most of a missing ray's call).
 #[inline(always)]
 pub fn misses_trace_box(trace_box: &ClipBox, ray: &Ray) -> bool {
-    !ray.is_valid()
-        || trace_box
-            .clip_ray(
-                ray.origin,
-                crate::geom::inverse(ray.dir),
-                ray.t_min,
-                ray.t_max,
-            )
-            .is_none()
+    trace_entry(trace_box, ray).is_none()
+}
+
+/// Where a walk of `ray` starts: its direction's [`crate::geom::inverse`]
+/// and its segment `[t0, t1]` inside `trace_box` (the same bits as
+/// [`KdTree::scene_segment`] of the prepared ray), or `None` for an invalid
+/// ray or one that misses the box. Asked before the per-ray constants only
+/// primitive tests need are computed: a ray that misses the scene's box
+/// (the sky around it) costs its clip only.
+#[inline(always)]
+fn trace_entry(trace_box: &ClipBox, ray: &Ray) -> Option<(Vec3, f32, f32)> {
+    if !ray.is_valid() {
+        return None;
+    }
+    let inv = crate::geom::inverse(ray.dir);
+    let (t0, t1) = trace_box.clip_ray(ray.origin, inv, ray.t_min, ray.t_max)?;
+    Some((inv, t0, t1))
 }
 
 impl<'a> KdTree<'a> {
@@ -235,11 +243,7 @@ impl<'a> KdTree<'a> {
     ) -> Hit {
         check_stack(stack);
         stats.rays += 1;
-        if !ray.is_valid() {
-            return Hit::MISS;
-        }
-        let inv = crate::geom::inverse(ray.dir);
-        let Some((t0, t1)) = self.segment_of(ray, inv) else {
+        let Some((inv, t0, t1)) = trace_entry(&self.trace_box, ray) else {
             return Hit::MISS;
         };
         let mut v = Closest {
@@ -269,11 +273,7 @@ impl<'a> KdTree<'a> {
     ) -> bool {
         check_stack(stack);
         stats.rays += 1;
-        if !ray.is_valid() {
-            return false;
-        }
-        let inv = crate::geom::inverse(ray.dir);
-        let Some((t0, t1)) = self.segment_of(ray, inv) else {
+        let Some((inv, t0, t1)) = trace_entry(&self.trace_box, ray) else {
             return false;
         };
         let mut v = Any {
@@ -329,18 +329,8 @@ impl<'a> KdTree<'a> {
             .clip_ray(r.origin, r.inv_dir, r.t_min, r.t_max)
     }
 
-    /// [`Self::scene_segment`] of `ray` as given, with `inv` its
-    /// direction's [`crate::geom::inverse`], bit for bit, before the per-ray
-    /// constants only primitive tests need are computed: a ray that misses
-    /// the scene's box (the sky around it) costs its clip only.
-    #[inline(always)]
-    fn segment_of(&self, ray: &Ray, inv: Vec3) -> Option<(f32, f32)> {
-        self.trace_box
-            .clip_ray(ray.origin, inv, ray.t_min, ray.t_max)
-    }
-
     /// The walk `method` names for the ray prepared in `v`, over its
-    /// segment `[t0, t1]` in the scene's box ([`Self::segment_of`]); true
+    /// segment `[t0, t1]` in the scene's box ([`trace_entry`]); true
     /// when the visitor stopped it.
     #[inline(always)]
     fn walk_by<V: LeafVisitor>(
