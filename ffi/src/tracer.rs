@@ -283,8 +283,10 @@ pub(crate) unsafe fn trace<'a, S, I: Plain, O>(
     // SAFETY: the handle passed `Sealed::new` for this kind when the
     // tracer was made, and its seal word is unchanged.
     let h = unsafe { Sealed::known(hw) };
+    // The scene's slices are cut where they are used (the ranges' check,
+    // the view), not on the way of a ray answered early.
     // SAFETY: as `Sealed::scene`: its arrays are in place (contract).
-    let scene = unsafe { h.scene() };
+    let scene = || unsafe { h.scene() };
     carve::check_array(ray, 1)?;
     carve::check_array(out, 1)?;
     let (r, o) = (ray as usize, out as usize);
@@ -297,7 +299,7 @@ pub(crate) unsafe fn trace<'a, S, I: Plain, O>(
     let moved = !(apart && placed);
     if moved {
         let [handle_words, arena] = h.spans();
-        let [vertices, triangles, spheres, cones] = Span::of_scene(&scene);
+        let [vertices, triangles, spheres, cones] = Span::of_scene(&scene());
         let stack = Span::of(b.stack as *const u8, b.stack_bytes);
         let own = Span::of(tracer, size_of::<CorayTracer>());
         let out_meets = [
@@ -333,7 +335,7 @@ pub(crate) unsafe fn trace<'a, S, I: Plain, O>(
         None => {
             // SAFETY: the arena's header and parts passed `view`'s checks
             // when the tracer was made and are unchanged (contract).
-            let s = view(h, scene, b.hint)?;
+            let s = view(h, scene(), b.hint)?;
             let need = stack_len(&s);
             if need > b.stack_bytes / size_of::<I>() {
                 return Err(CorayStatus::ArenaTooSmall);
