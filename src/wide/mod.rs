@@ -271,12 +271,14 @@ impl<'a> WideBvh<'a> {
 
     /// This hierarchy with its walks reading ahead (`true`) or not: when a
     /// node sends the ray on to several entries, the farther ones, which
-    /// wait on the stack, are read once (a word of each cache line of the
-    /// node or of the leaf's first corner block) so that their memory is
-    /// on its way while the nearest is walked. It pays when the hierarchy
-    /// lives beyond the core's own caches and costs a few percent when it
-    /// does not; the default is on above [`READ_AHEAD_BYTES`] of nodes
-    /// and corner blocks. The answers are the same either way.
+    /// wait on the stack, have each cache line of their node or of their
+    /// leaf's first corner block fetched (a prefetch instruction on
+    /// x86-64, a load of one word a line elsewhere) so that their memory
+    /// is on its way while the nearest is walked. It pays most when the
+    /// hierarchy lives beyond the core's own caches; a load costs a few
+    /// percent when it does not, a prefetch nothing measured. The default
+    /// is on above [`READ_AHEAD_BYTES`] of nodes and corner blocks (on
+    /// x86-64: always). The answers are the same either way.
     pub fn with_read_ahead(self, on: bool) -> WideBvh<'a> {
         WideBvh {
             read_ahead: on,

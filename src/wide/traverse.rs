@@ -367,14 +367,29 @@ fn fmax(a: f32, b: f32) -> f32 {
 }
 
 /// Bytes of nodes and corner blocks above which a hierarchy's walks read
-/// ahead by default ([`WideBvh::with_read_ahead`]): a typical per-core L2
-/// cache (2 MiB on the machine the figures come from). Reading ahead over
-/// not, incoherent rays, one process alternating the two: `random` (6.4
-/// MiB) 1.04-1.19x, `spd:gears` (2.1 MiB) 1.02-1.18x, `spd:teapot` (0.5
-/// MiB) 0.95x, `spd:balls` (0.4 MiB) 0.92x. In `coray bench --table
-/// speed` (wide over `rtcIntersect1`, with the leaves' reference reads
-/// dropped in the same change) random's incoherent rays went from
-/// 0.67-0.68 to 0.69.
+/// ahead by default ([`WideBvh::with_read_ahead`]).
+///
+/// On x86-64 a read-ahead is a prefetch instruction, which costs a small
+/// hierarchy nothing measured, and every hierarchy reads ahead. Against
+/// loads above 2 MiB (below), incoherent rays, wide over `rtcIntersect1`
+/// (`coray bench --table speed --res 256`, the two builds alternated,
+/// two rounds): `random` (6.4 MiB) 0.60 / 0.57 -> 1.08 / 0.69, through
+/// the wide tracer 0.63 / 0.62 -> 0.70 / 0.69; `spd:gears` (2.1 MiB)
+/// 0.81 / 0.78 -> 0.84 / 0.83; the other SPD scenes, which read nothing
+/// ahead before, within the noise on every ray set.
+#[cfg(target_arch = "x86_64")]
+pub const READ_AHEAD_BYTES: usize = 0;
+
+/// Bytes of nodes and corner blocks above which a hierarchy's walks read
+/// ahead by default ([`WideBvh::with_read_ahead`]).
+///
+/// Elsewhere a read-ahead is a load (below), which pays beyond a typical
+/// per-core L2 cache (2 MiB on the machine the figures come from) and not
+/// within it: reading ahead over not, incoherent rays, one process
+/// alternating the two (x86-64, when it read ahead by loads too): `random`
+/// (6.4 MiB) 1.04-1.19x, `spd:gears` (2.1 MiB) 1.02-1.18x, `spd:teapot`
+/// (0.5 MiB) 0.95x, `spd:balls` (0.4 MiB) 0.92x.
+#[cfg(not(target_arch = "x86_64"))]
 pub const READ_AHEAD_BYTES: usize = 2 << 20;
 
 /// Whether walks over `nodes` and `corners` read ahead by default: they
@@ -383,22 +398,44 @@ pub(crate) fn reads_ahead(nodes: &[WideNode], corners: &[Corners4]) -> bool {
     size_of_val(nodes) + size_of_val(corners) > READ_AHEAD_BYTES
 }
 
-/// Reads a word of each cache line of what an entry names (an interior
+/// Starts loading every cache line of what an entry names (an interior
 /// child's node, a leaf's first corner block) when the entry goes to the
 /// stack, so that its lines are on their way while the nearest entry is
-/// walked: a prefetch in safe code (the words are folded into `touch`,
-/// which the walk hands to `black_box`, so that the reads stay). A hint:
-/// what it reads changes no answer, and an index past its slice reads
-/// nothing.
+/// walked. A hint: what it reads changes no answer, and an index past its
+/// slice reads nothing. Words 64 bytes apart or less, first and last: each
+/// line of a 16-aligned node (128 bytes) or block (144) holds one of them.
 #[inline(always)]
 fn read_entry_ahead(w: &WideBvh, child: u32, touch: &mut u32) {
     if child & LEAF_BIT == 0 {
         if let Some(n) = w.nodes.get(child as usize) {
-            // Bytes 0 and 96 of the node's 128.
-            *touch ^= n.min[0][0].to_bits() ^ n.child[0];
+            // Bytes 0, 64 and 124 of the node's 128.
+            line_ahead(n.min[0][0].to_bits(), &n.min[0][0], touch);
+            line_ahead(n.max[1][0].to_bits(), &n.max[1][0], touch);
+            line_ahead(n.count[WIDTH - 1], &n.count[WIDTH - 1], touch);
         }
     } else if let Some(b) = w.corners.get((child & !LEAF_BIT) as usize / TRI_LANES) {
-        // Bytes 0, 80 and 140 of the block's 144.
-        *touch ^= b[0][0][0].to_bits() ^ b[1][2][0].to_bits() ^ b[2][2][3].to_bits();
+        // Bytes 0, 64 and 140 of the block's 144.
+        line_ahead(b[0][0][0].to_bits(), &b[0][0][0], touch);
+        line_ahead(b[1][1][0].to_bits(), &b[1][1][0], touch);
+        line_ahead(b[2][2][3].to_bits(), &b[2][2][3], touch);
+    }
+}
+
+/// Starts loading the cache line that holds `word`: on x86-64 a
+/// `prefetcht0` (`safe_arch`'s safe wrapper of `_mm_prefetch`; the core
+/// itself holds no `unsafe`), which waits for nothing and leaves `bits`
+/// unread; elsewhere the load of `bits`, folded into `touch`, which the walk
+/// hands to `black_box` so that the load stays.
+#[inline(always)]
+fn line_ahead<T>(bits: u32, word: &T, touch: &mut u32) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        let _ = (bits, touch);
+        safe_arch::prefetch_t0(word);
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let _ = word;
+        *touch ^= bits;
     }
 }
