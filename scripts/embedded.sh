@@ -7,7 +7,7 @@
 # built for the host against the host's bare library, and requires the same
 # check lines from both. Prints flash, RAM and stack figures; fails when
 # the kd-tree + LCTS firmware's flash passes 128 KiB or a kd phase's stack
-# 32 KiB.
+# 32 KiB. Also builds the bare C library for x86_64-unknown-none (no SSE).
 #
 # Installs what is missing with apt-get (as root). Called by scripts/test.sh.
 set -euo pipefail
@@ -43,6 +43,12 @@ RUSTC_BOOTSTRAP=1 RUSTC=/usr/bin/rustc /usr/bin/cargo rustc -q -p coray-ffi \
     --no-default-features --profile embedded --target thumbv7em-none-eabihf \
     -Zbuild-std=core --target-dir "$out" --crate-type staticlib
 board_lib="$out/thumbv7em-none-eabihf/embedded/libcoray_ffi.a"
+
+# A soft-float x86-64 target (a kernel's: no SSE) builds the C library
+# too: its wide walk reads ahead by loads, not by SSE prefetches.
+RUSTC_BOOTSTRAP=1 RUSTC=/usr/bin/rustc /usr/bin/cargo rustc -q -p coray-ffi \
+    --no-default-features --profile embedded --target x86_64-unknown-none \
+    -Zbuild-std=core --target-dir "$out" --crate-type staticlib
 
 # The host's bare library (profile bare, opt-level 3, this machine's
 # toolchain): the checks must agree across optimisation levels too.

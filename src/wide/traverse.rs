@@ -369,7 +369,8 @@ fn fmax(a: f32, b: f32) -> f32 {
 /// Bytes of nodes and corner blocks above which a hierarchy's walks read
 /// ahead by default ([`WideBvh::with_read_ahead`]).
 ///
-/// On x86-64 a read-ahead is a prefetch instruction, which costs a small
+/// On x86-64 (with SSE: all but the soft-float targets) a read-ahead is a
+/// prefetch instruction, which costs a small
 /// hierarchy nothing measured, and every hierarchy reads ahead. Against
 /// loads above 2 MiB (below), incoherent rays, wide over `rtcIntersect1`
 /// (`coray bench --table speed --res 256`, the two builds alternated,
@@ -377,7 +378,7 @@ fn fmax(a: f32, b: f32) -> f32 {
 /// the wide tracer 0.63 / 0.62 -> 0.70 / 0.69; `spd:gears` (2.1 MiB)
 /// 0.81 / 0.78 -> 0.84 / 0.83; the other SPD scenes, which read nothing
 /// ahead before, within the noise on every ray set.
-#[cfg(target_arch = "x86_64")]
+#[cfg(all(target_arch = "x86_64", target_feature = "sse"))]
 pub const READ_AHEAD_BYTES: usize = 0;
 
 /// Bytes of nodes and corner blocks above which a hierarchy's walks read
@@ -389,7 +390,7 @@ pub const READ_AHEAD_BYTES: usize = 0;
 /// alternating the two (x86-64, when it read ahead by loads too): `random`
 /// (6.4 MiB) 1.04-1.19x, `spd:gears` (2.1 MiB) 1.02-1.18x, `spd:teapot`
 /// (0.5 MiB) 0.95x, `spd:balls` (0.4 MiB) 0.92x.
-#[cfg(not(target_arch = "x86_64"))]
+#[cfg(not(all(target_arch = "x86_64", target_feature = "sse")))]
 pub const READ_AHEAD_BYTES: usize = 2 << 20;
 
 /// Whether walks over `nodes` and `corners` read ahead by default: they
@@ -428,12 +429,12 @@ fn read_entry_ahead(w: &WideBvh, child: u32, touch: &mut u32) {
 /// hands to `black_box` so that the load stays.
 #[inline(always)]
 fn line_ahead<T>(bits: u32, word: &T, touch: &mut u32) {
-    #[cfg(target_arch = "x86_64")]
+    #[cfg(all(target_arch = "x86_64", target_feature = "sse"))]
     {
         let _ = (bits, touch);
         safe_arch::prefetch_t0(word);
     }
-    #[cfg(not(target_arch = "x86_64"))]
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "sse")))]
     {
         let _ = word;
         *touch ^= bits;
