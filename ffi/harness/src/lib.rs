@@ -222,9 +222,16 @@ fn same(a: &CorayHit, b: &CorayHit) -> bool {
 }
 
 /// The trace answers of one arena for `rays`: closest hits by the array
-/// call, by the one-ray call, any-hit answers, and the statuses of the
-/// two array calls.
-type Answers = (Vec<CorayHit>, Vec<CorayHit>, Vec<u8>, [CorayStatus; 2]);
+/// call, by the one-ray call, any-hit answers, the statuses of the two
+/// array calls, and which rays the one-ray call took (an answer it
+/// refused is the zeroed default, not a miss).
+type Answers = (
+    Vec<CorayHit>,
+    Vec<CorayHit>,
+    Vec<u8>,
+    [CorayStatus; 2],
+    Vec<bool>,
+);
 
 /// Runs one input. Panics when a property above fails.
 pub fn run(data: &[u8]) -> Report {
@@ -357,11 +364,30 @@ fn compare(what: &str, clean: &Answers, got: &Answers, rays: &[CorayRay]) {
     }
     for (i, ray) in rays.iter().enumerate() {
         assert!(
-            same(&clean.0[i], &got.0[i]) && same(&clean.1[i], &got.1[i]),
+            same(&clean.0[i], &got.0[i]),
             "{what}: a validated arena answers ray {i} ({ray:?}) otherwise: {:?} against {:?}",
             got.0[i],
             clean.0[i]
         );
+        match (clean.4[i], got.4[i]) {
+            (true, true) => assert!(
+                same(&clean.1[i], &got.1[i]),
+                "{what}: a validated arena's one-ray call answers ray {i} ({ray:?}) otherwise: \
+                 {:?} against {:?}",
+                got.1[i],
+                clean.1[i]
+            ),
+            // Taken by one arena and refused by the other: only a
+            // projection plane's eye, moved by a rounding, changes which
+            // rays a call takes (the array calls' rule above, ray by ray:
+            // both array calls may refuse the batch for another ray).
+            (a, b) if a != b => assert_eq!(
+                what, "proj",
+                "{what}: a validated arena's one-ray call takes ray {i} ({ray:?}): {b}, \
+                 the clean one's: {a}"
+            ),
+            _ => {}
+        }
         assert_eq!(
             clean.2[i] != 0,
             got.2[i] != 0,
@@ -604,7 +630,7 @@ fn kd_trace(
         make,
         on_tracer,
     );
-    (hits, ones, occ, statuses)
+    (hits, ones, occ, statuses, one_ok)
 }
 
 fn kd_cast(t: &CorayKdTree, inp: &mut Input, rep: &mut Report) {
@@ -934,7 +960,7 @@ fn trace_answers<H>(
         make,
         on_tracer,
     );
-    (hits, ones, occ, statuses)
+    (hits, ones, occ, statuses, one_ok)
 }
 
 fn bvh_trace(h: &CorayBvh, rays: &[CorayRay], stack_bytes: usize, rep: &mut Report) -> Answers {
@@ -1212,7 +1238,7 @@ fn proj_trace(
         make,
         on_tracer,
     );
-    (hits, ones, occ, statuses)
+    (hits, ones, occ, statuses, one_ok)
 }
 
 /// Sizes of the ABI structs the harness builds by hand, checked so that a
