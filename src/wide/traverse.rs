@@ -370,8 +370,8 @@ fn fmax(a: f32, b: f32) -> f32 {
 /// ahead by default ([`WideBvh::with_read_ahead`]).
 ///
 /// On x86-64 (with SSE: all but the soft-float targets) a read-ahead is a
-/// prefetch instruction, which costs a small
-/// hierarchy nothing measured, and every hierarchy reads ahead. Against
+/// prefetch instruction, which costs a small hierarchy nothing measured,
+/// and every hierarchy reads ahead. Against
 /// loads above 2 MiB (below), incoherent rays, wide over `rtcIntersect1`
 /// (`coray bench --table speed --res 256`, the two builds alternated,
 /// two rounds): `random` (6.4 MiB) 0.60 / 0.57 -> 1.08 / 0.69, through
@@ -403,8 +403,9 @@ pub(crate) fn reads_ahead(nodes: &[WideNode], corners: &[Corners4]) -> bool {
 /// child's node, a leaf's first corner block) when the entry goes to the
 /// stack, so that its lines are on their way while the nearest entry is
 /// walked. A hint: what it reads changes no answer, and an index past its
-/// slice reads nothing. Words 64 bytes apart or less, first and last: each
-/// line of a 16-aligned node (128 bytes) or block (144) holds one of them.
+/// slice reads nothing. Three words a record, whose lines are all of a
+/// 16-aligned node's (128 bytes) or block's (144) wherever it starts: a
+/// node spans two or three lines, a block always three.
 #[inline(always)]
 fn read_entry_ahead(w: &WideBvh, child: u32, touch: &mut u32) {
     if child & LEAF_BIT == 0 {
