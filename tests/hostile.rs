@@ -307,6 +307,65 @@ fn kd_random_words() {
     });
 }
 
+/// The tree's box moved, one face at a time, out or in (found by the C-ABI
+/// fuzzer: a header byte took the box's top from 2.5 to 2e32, the tree
+/// validated, and a ray grazing a triangle's plane was answered otherwise,
+/// its rounded hit now inside the first leaf's span). The box is the
+/// scene's: a tree whose box is any other must not validate, and one that
+/// does gives the clean hits.
+#[test]
+fn kd_scene_box_moved() {
+    watchdog(120, "kd scene box moved", || {
+        let s = scene(5);
+        let sc = s.scene();
+        let rays = rays();
+        for params in [
+            KdParams::auto(),
+            KdParams::auto_with_ropes(),
+            KdParams::paper(),
+        ] {
+            let clean = OwnedKd::new(&sc, &params).unwrap();
+            let t = clean.tree(sc).unwrap();
+            let want = exercise_kd(&t, &rays).0;
+            let (nodes, ropes, rope_ids, refs) = t.parts();
+            let b = t.info().bounds();
+            let mut accepted = 0;
+            for face in 0..6 {
+                let (axis, top) = (face / 2, face % 2 == 1);
+                let extent = b.max[axis] - b.min[axis];
+                // Far out, a little out, a little in (past no split: the
+                // splits lie well inside a random scene's box).
+                for step in [1e30, 0.01 * extent, -0.001 * extent] {
+                    let mut info = *t.info();
+                    if top {
+                        info.bounds_max[axis] += step;
+                    } else {
+                        info.bounds_min[axis] -= step;
+                    }
+                    let Ok(bad) = KdTree::from_parts(sc, info, nodes, ropes, rope_ids, refs) else {
+                        continue;
+                    };
+                    let ok = bad.validate().is_ok();
+                    let (got, faulted) = exercise_kd(&bad, &rays);
+                    if ok {
+                        accepted += 1;
+                        assert!(
+                            !faulted,
+                            "face {face} moved by {step}: validated, then faulted"
+                        );
+                        let diff = got.iter().zip(&want).filter(|(a, b)| !same(a, b)).count();
+                        assert_eq!(
+                            diff, 0,
+                            "face {face} moved by {step}: validated, then {diff} different hits"
+                        );
+                    }
+                }
+            }
+            assert_eq!(accepted, 0, "{accepted} moved boxes validated");
+        }
+    });
+}
+
 fn builders() -> Vec<BvhBuild> {
     vec![
         BvhBuild::Static(Builder::Tdbs, 1),

@@ -48,7 +48,8 @@ impl<'a> KdTree<'a> {
     /// splits strictly inside their node's box, depth within the recorded
     /// depth, reference ranges and rope records consecutive, every
     /// reference naming a non-degenerate primitive that touches its leaf's
-    /// box, the references' and the nodes' digests as recorded (a split
+    /// box, the tree's box the union of its referenced primitives' boxes
+    /// (the build's), the references' and the nodes' digests as recorded (a split
     /// moved within its box keeps the references consistent, and only the
     /// nodes' digest, or a tree's rope records, tell), leaf boxes equal to the
     /// ones implied by the splits, and every rope leading to a node whose
@@ -104,6 +105,8 @@ impl<'a> KdTree<'a> {
         let mut next_ref = 0u32;
         let mut sah = 0.0f64;
         let mut digest = 0u64;
+        // The box of every referenced primitive: the build's root box.
+        let mut referenced = Aabb::EMPTY;
         let prims = self.scene.prim_count();
         while sp > 0 {
             sp -= 1;
@@ -145,7 +148,7 @@ impl<'a> KdTree<'a> {
                         return Err(corrupt("reference out of range"));
                     }
                     match self.scene.prim_bounds(p as usize) {
-                        Some(pb) if touches(&pb, &b) => {}
+                        Some(pb) if touches(&pb, &b) => referenced = referenced.union(&pb),
                         _ => return Err(corrupt("reference outside its leaf")),
                     }
                     digest = digest.wrapping_add(crate::rng::ref_mix(p));
@@ -202,6 +205,13 @@ impl<'a> KdTree<'a> {
         }
         if st.depth != info.depth {
             return Err(corrupt("depth"));
+        }
+        // The build's box is its primitives' (each valid one is referenced):
+        // any other box, larger or smaller, moves the cells' spans along a
+        // ray, and with them which rounded hits of grazing rays count (or,
+        // smaller, cuts primitives off).
+        if referenced != root {
+            return Err(corrupt("scene box"));
         }
         if digest != info.ref_digest() {
             return Err(corrupt("reference digest"));
