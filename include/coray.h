@@ -1470,7 +1470,10 @@ enum CorayStatus coray_wide_info(const struct CorayWide *wide, struct CorayWideI
 // Safety: as `coray_wide_info`.
 enum CorayStatus coray_wide_validate(const struct CorayWide *wide, struct CorayShape *out);
 
-// Closest hits of `count` rays: `hits[i]` for `rays[i]`. `stack` is the
+// Closest hits of `count` rays: `hits[i]` for `rays[i]`. Runs of eight
+// rays that agree on their direction signs (camera tiles, shadow rays
+// towards one light) are traced together in packets where the CPU has
+// AVX2; the answers are the one-ray calls' either way. `stack` is the
 // caller's traversal stack of `stack_bytes` (at least the info's
 // `stack_bytes`, 16-byte aligned; one per thread). `stats` may be NULL.
 // Many threads may trace one hierarchy at once, each with its own stack.

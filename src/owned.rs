@@ -277,8 +277,8 @@ impl OwnedBvh {
 /// A wide hierarchy's parts and its build scratch.
 pub struct OwnedWide {
     nodes: Vec<WideNode>,
+    blocks: Vec<wide::LeafBlock>,
     refs: Vec<u32>,
-    corners: Vec<crate::geom::Corners4>,
     bvh_nodes: Vec<BvhNode>,
     boxes: Vec<Aabb>,
     keys: Vec<f32>,
@@ -292,8 +292,8 @@ impl OwnedWide {
         let r = wide::requirements(prim_count);
         OwnedWide {
             nodes: vec![WideNode::default(); r.nodes],
+            blocks: vec![wide::EMPTY_BLOCK; r.blocks],
             refs: vec![0; r.refs],
-            corners: vec![wide::corners::NAN_BLOCK; r.corners],
             bvh_nodes: vec![BvhNode::default(); r.bvh_nodes],
             boxes: vec![Aabb::EMPTY; r.boxes],
             keys: vec![0.0; r.keys],
@@ -303,17 +303,18 @@ impl OwnedWide {
     }
 
     /// Builds into this room with leaves of at most `leaf_size`; the
-    /// scratch is freed afterwards.
+    /// scratch is freed afterwards, and the parts shrunk to what the
+    /// hierarchy uses.
     pub fn build(&mut self, scene: &Scene, leaf_size: u32) -> Result<(), Error> {
         let t = wide::build(
             scene,
             leaf_size,
             wide::WideStorage {
                 nodes: &mut self.nodes,
-                refs: &mut self.refs,
-                corners: &mut self.corners,
+                blocks: &mut self.blocks,
             },
             wide::WideScratch {
+                refs: &mut self.refs,
                 bvh_nodes: &mut self.bvh_nodes,
                 boxes: &mut self.boxes,
                 keys: &mut self.keys,
@@ -321,6 +322,11 @@ impl OwnedWide {
             },
         )?;
         self.info = *t.info();
+        self.nodes.truncate(self.info.node_count as usize);
+        self.nodes.shrink_to_fit();
+        self.blocks.truncate(self.info.block_count as usize);
+        self.blocks.shrink_to_fit();
+        self.refs = Vec::new();
         self.bvh_nodes = Vec::new();
         self.boxes = Vec::new();
         self.keys = Vec::new();
@@ -337,7 +343,7 @@ impl OwnedWide {
 
     /// The built hierarchy over `scene` (the scene it was built on).
     pub fn view<'a>(&'a self, scene: Scene<'a>) -> Result<WideBvh<'a>, Error> {
-        WideBvh::from_parts(scene, &self.nodes, &self.refs, &self.corners, self.info)
+        WideBvh::from_parts(scene, &self.nodes, &self.blocks, self.info)
     }
 
     /// What the build made.
@@ -345,29 +351,16 @@ impl OwnedWide {
         &self.info
     }
 
-    /// Bytes of the nodes in use, the references and their corner blocks.
+    /// Bytes of the nodes and leaf blocks in use.
     pub fn bytes(&self) -> usize {
         let i = &self.info;
         i.node_count as usize * core::mem::size_of::<WideNode>()
-            + i.ref_count as usize * 4
-            + i.corner_blocks as usize * core::mem::size_of::<crate::geom::Corners4>()
+            + i.block_count as usize * core::mem::size_of::<wide::LeafBlock>()
     }
 
     /// The parts, to corrupt in tests.
-    pub fn parts_mut(
-        &mut self,
-    ) -> (
-        &mut [WideNode],
-        &mut [u32],
-        &mut [crate::geom::Corners4],
-        &mut WideInfo,
-    ) {
-        (
-            &mut self.nodes,
-            &mut self.refs,
-            &mut self.corners,
-            &mut self.info,
-        )
+    pub fn parts_mut(&mut self) -> (&mut [WideNode], &mut [wide::LeafBlock], &mut WideInfo) {
+        (&mut self.nodes, &mut self.blocks, &mut self.info)
     }
 }
 

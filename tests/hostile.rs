@@ -755,8 +755,9 @@ fn wide_random_words() {
             let (part, pick, value) = (rng.below(5), rng.next_u64(), rng.next_u64() as u32);
             let small = rng.below(40) as u32;
             accepted += wide_cases(&s, &rays, "random word", |w| {
-                let (nodes, refs, corners, info) = w.parts_mut();
-                let slot = (pick >> 20) as usize % 4;
+                let (nodes, blocks, info) = w.parts_mut();
+                let slot = (pick >> 20) as usize % coray::wide::WIDTH;
+                let lane = slot % 4;
                 match part {
                     0 => {
                         let nd = &mut nodes[(pick % info.node_count as u64) as usize];
@@ -764,28 +765,30 @@ fn wide_random_words() {
                             0 => nd.child[slot] = small,
                             1 => nd.child[slot] = value,
                             2 => nd.child[slot] ^= 1 << 31,
-                            3 => nd.count[slot] = small,
-                            4 => nd.count[slot] = value,
-                            5 => nd.min[slot % 3][slot] = f32::from_bits(value),
-                            6 => nd.max[slot % 3][slot] = f32::from_bits(value),
+                            3 => nd.child[slot] ^= 1 << (27 + (pick >> 50) % 4),
+                            4 => nd.child[slot] = coray::wide::leaf_entry(small, 1 + small % 16),
+                            5 => nd.planes[slot % 3][slot] = f32::from_bits(value),
+                            6 => nd.planes[3 + slot % 3][slot] = f32::from_bits(value),
                             _ => nd.child[slot] = coray::wide::EMPTY_SLOT,
                         }
                     }
-                    1 => refs[(pick % refs.len().max(1) as u64) as usize] = small,
-                    2 => refs[(pick % refs.len().max(1) as u64) as usize] = value,
+                    1 | 2 => {
+                        let b = &mut blocks[(pick % blocks.len().max(1) as u64) as usize];
+                        b.prims[lane] = if part == 1 { small } else { value };
+                    }
                     3 => {
-                        let b = &mut corners[(pick % corners.len().max(1) as u64) as usize];
+                        let b = &mut blocks[(pick % blocks.len().max(1) as u64) as usize];
                         let (k, a) = ((pick >> 8) as usize % 3, (pick >> 12) as usize % 3);
-                        b[k][a][slot] = match pick >> 40 & 1 {
+                        b.corners[k][a][lane] = match pick >> 40 & 1 {
                             0 => f32::from_bits(value),
-                            _ => b[k][a][slot] + small as f32 * 0.25,
+                            _ => b.corners[k][a][lane] + small as f32 * 0.25,
                         };
                     }
                     _ => match pick >> 40 & 7 {
                         0 => info.depth = value % 64,
                         1 => info.node_count = value % (2 * info.node_count + 2),
                         2 => info.ref_count = value % (2 * info.ref_count + 2),
-                        3 | 4 => info.corner_blocks = value % (2 * info.corner_blocks + 2),
+                        3 | 4 => info.block_count = value % (2 * info.block_count + 2),
                         _ => info.leaf_count = small,
                     },
                 }
@@ -805,19 +808,18 @@ fn wide_cycle_and_reference_past_the_scene() {
         let n = s.scene().prim_count() as u32;
         assert_eq!(
             wide_cases(&s, &rays(), "cycle", |w| {
-                let (nodes, _, _, info) = w.parts_mut();
+                let (nodes, _, info) = w.parts_mut();
                 let last = info.node_count as usize - 1;
                 let slot = nodes[last].child.iter().position(|&c| c & (1 << 31) == 0);
                 nodes[last].child[slot.unwrap_or(0)] = 0;
-                nodes[last].count[slot.unwrap_or(0)] = 0;
             }),
             0
         );
         for bad in [n, n + 2, u32::MAX] {
             assert_eq!(
                 wide_cases(&s, &rays(), "reference past the scene", |w| {
-                    let (_, refs, _, _) = w.parts_mut();
-                    refs[0] = bad;
+                    let (_, blocks, _) = w.parts_mut();
+                    blocks[0].prims[0] = bad;
                 }),
                 0
             );

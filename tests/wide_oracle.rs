@@ -100,6 +100,7 @@ fn every_leaf_size_matches_the_oracle_and_the_kd_tree() {
         // fewer wide nodes than primitives, and with leaves of one
         // primitive exactly one leaf entry a primitive.
         assert!((info.node_count as usize) < n);
+        assert!(info.node_count as usize <= wide::nodes_bound(info.leaf_count as usize));
         if leaf == 1 {
             assert_eq!(info.leaf_count as usize, n);
         }
@@ -110,30 +111,35 @@ fn every_leaf_size_matches_the_oracle_and_the_kd_tree() {
     }
 }
 
-/// Leaf entries: how many, how many of two slots or more, and how many
-/// span more blocks of four slots than their length needs.
-fn straddling_runs(w: &WideBvh) -> (usize, usize, usize) {
-    let (mut runs, mut long, mut extra) = (0, 0, 0);
-    for nd in w.parts().0 {
+/// Leaf entries: how many, how many hold more than one primitive, and
+/// whether each takes exactly the blocks its primitives need (full blocks
+/// but its last, which holds its primitives first).
+fn leaf_blocks(w: &WideBvh) -> (usize, usize, bool) {
+    let (nodes, blocks) = w.parts();
+    let (mut leaves, mut long, mut tight) = (0, 0, true);
+    for nd in nodes {
         for i in 0..nd.len() {
             if nd.child[i] & wide::LEAF_BIT != 0 {
-                let f = (nd.child[i] & !wide::LEAF_BIT) as usize;
-                let len = nd.count[i] as usize;
-                runs += 1;
-                long += usize::from(len > 1);
-                extra += usize::from((f + len).div_ceil(4) - f / 4 > len.div_ceil(4));
+                let (f, count) = wide::leaf_run(nd.child[i]);
+                let held: Vec<u32> = blocks[f..f + count]
+                    .iter()
+                    .flat_map(|b| b.prims)
+                    .take_while(|&p| p != wide::NO_PRIM)
+                    .collect();
+                leaves += 1;
+                long += usize::from(held.len() > 1);
+                tight &= count == held.len().div_ceil(wide::BLOCK_SLOTS);
             }
         }
     }
-    (runs, long, extra)
+    (leaves, long, tight)
 }
 
-/// On SPD scenes whose leaves hold two to four triangles, leaf runs are
-/// placed so that none spans more blocks of corners than it needs (in
-/// build order, a quarter of them would), and the hierarchy still traces
+/// On SPD scenes whose leaves hold two to four triangles, each leaf takes
+/// the fewest blocks its primitives fill, and the hierarchy still traces
 /// as the kd-tree.
 #[test]
-fn leaf_runs_fill_their_blocks_on_spd_scenes() {
+fn leaves_take_the_fewest_blocks_on_spd_scenes() {
     for name in ["teapot", "gears"] {
         let nff = coray_scenes::spd::generate(name, Some(2), &Default::default()).unwrap();
         let mesh = coray_scenes::SceneMesh::from_nff(&nff);
@@ -141,12 +147,17 @@ fn leaf_runs_fill_their_blocks_on_spd_scenes() {
         let owned = OwnedWide::new(&scene, 4).unwrap();
         let w = owned.view(scene).unwrap();
         w.validate().unwrap();
-        let (runs, long, extra) = straddling_runs(&w);
+        let (leaves, long, tight) = leaf_blocks(&w);
         assert!(
-            long * 2 > runs,
-            "{name}: {long} of {runs} runs longer than one"
+            long * 2 > leaves,
+            "{name}: {long} of {leaves} leaves longer than one"
         );
-        assert_eq!(extra, 0, "{name}: {extra} of {runs} runs straddle");
+        assert!(tight, "{name}: a leaf takes more blocks than it fills");
+        assert_eq!(
+            leaves,
+            w.info().block_count as usize,
+            "{name}: one block a leaf"
+        );
         let kd = OwnedKd::new(&scene, &KdParams::auto()).unwrap();
         // Rays between two points of the scene's box.
         let mut rng = Rng(5);
@@ -170,54 +181,64 @@ fn leaf_runs_fill_their_blocks_on_spd_scenes() {
     }
 }
 
-/// Corner blocks cover only the runs that hold a triangle: none for a
-/// scene of spheres and cones, fewer slots than references for a mixed
-/// one, every triangle's for a scene of triangles; each traces as the
-/// kd-tree.
+/// Blocks hold every kind: spheres and cones in slots of NaN corners
+/// beside triangles, one block for every four primitives of a leaf; each
+/// scene traces as the kd-tree.
 #[test]
-fn corner_blocks_cover_the_runs_with_triangles() {
+fn blocks_hold_every_kind() {
     for (tris, others, seed) in [(0, 300, 41), (300, 300, 42), (600, 0, 43)] {
         let mut rng = Rng(seed);
         let o = random_scene(&mut rng, tris, others / 2, others - others / 2, 5.0);
         let scene = o.scene();
-        let owned = OwnedWide::new(&scene, 4).unwrap();
-        let w = owned.view(scene).unwrap();
-        w.validate().unwrap();
-        let (blocks, n) = (w.info().corner_blocks as usize, scene.prim_count());
-        match (tris, others) {
-            (0, _) => assert_eq!(blocks, 0),
-            (_, 0) => assert_eq!(blocks, n.div_ceil(4)),
-            _ => assert!(
-                blocks * 4 >= tris && blocks * 4 < n,
-                "{blocks} blocks, {n} refs"
-            ),
+        for leaf in [4, 9] {
+            let owned = OwnedWide::new(&scene, leaf).unwrap();
+            let w = owned.view(scene).unwrap();
+            w.validate().unwrap();
+            let (_, _, tight) = leaf_blocks(&w);
+            assert!(tight);
+            let (_, blocks) = w.parts();
+            let held = blocks
+                .iter()
+                .flat_map(|b| b.prims)
+                .filter(|&p| p != wide::NO_PRIM)
+                .count();
+            assert_eq!(held, scene.prim_count());
+            // Slots of spheres and cones have NaN corners.
+            let nt = scene.triangles.len() as u32;
+            for b in blocks {
+                for lane in 0..wide::BLOCK_SLOTS {
+                    let triangle = b.prims[lane] < nt;
+                    assert_eq!(!b.corners[0][0][lane].is_nan(), triangle);
+                }
+            }
+            let mixed = mixed_leaves(&w);
+            if tris > 0 && others > 0 {
+                assert!(mixed > 10, "{mixed} mixed leaves");
+            } else {
+                assert_eq!(mixed, 0);
+            }
+            let kd = OwnedKd::new(&scene, &KdParams::auto()).unwrap();
+            let rays = random_rays(&mut rng, 1000, 5.0);
+            let hits = check(&w, &kd.tree(scene).unwrap(), &rays, "blocks");
+            assert!(hits > 100, "{hits} hits");
         }
-        // Runs holding triangles and spheres or cones together: their
-        // other slots are found by their blocks' NaN lanes, not by reading
-        // their references.
-        let mixed = mixed_runs(&w);
-        if tris > 0 && others > 0 {
-            assert!(mixed > 20, "{mixed} mixed runs");
-        } else {
-            assert_eq!(mixed, 0);
-        }
-        let kd = OwnedKd::new(&scene, &KdParams::auto()).unwrap();
-        let rays = random_rays(&mut rng, 1000, 5.0);
-        let hits = check(&w, &kd.tree(scene).unwrap(), &rays, "corner blocks");
-        assert!(hits > 100, "{hits} hits");
     }
 }
 
-/// Leaf entries whose run holds a triangle and a sphere or cone.
-fn mixed_runs(w: &WideBvh) -> usize {
-    let (nodes, refs) = w.parts();
+/// Leaf entries holding a triangle and a sphere or cone.
+fn mixed_leaves(w: &WideBvh) -> usize {
+    let (nodes, blocks) = w.parts();
     let nt = w.scene().triangles.len() as u32;
     let mut mixed = 0;
     for n in nodes {
         for i in 0..WIDTH {
             if n.child[i] != wide::EMPTY_SLOT && n.child[i] & wide::LEAF_BIT != 0 {
-                let f = (n.child[i] & !wide::LEAF_BIT) as usize;
-                let run = &refs[f..f + n.count[i] as usize];
+                let (f, count) = wide::leaf_run(n.child[i]);
+                let run: Vec<u32> = blocks[f..f + count]
+                    .iter()
+                    .flat_map(|b| b.prims)
+                    .filter(|&p| p != wide::NO_PRIM)
+                    .collect();
                 mixed += (run.iter().any(|&p| p < nt) && run.iter().any(|&p| p >= nt)) as usize;
             }
         }
@@ -281,7 +302,7 @@ fn reading_ahead_changes_no_answer() {
             node_count: count as u32,
             ..Default::default()
         };
-        let w = WideBvh::from_parts(Scene::default(), &nodes, &[], &[], info).unwrap();
+        let w = WideBvh::from_parts(Scene::default(), &nodes, &[], info).unwrap();
         assert_eq!(w.read_ahead(), reads, "{count} nodes");
     }
 }
@@ -371,7 +392,8 @@ fn empty_single_and_degenerate_scenes() {
 }
 
 /// Exact counts on a grid of 64 unit quads (128 triangles): leaves of one
-/// primitive give 128 leaf entries, every node full but the last level's.
+/// primitive give 128 leaf entries and 128 blocks, every node full but the
+/// last level's.
 #[test]
 fn grid_counts() {
     let mut o = OwnedScene::default();
@@ -386,25 +408,26 @@ fn grid_counts() {
     let w = owned.view(scene).unwrap();
     let shape = w.validate().unwrap();
     assert_eq!((shape.refs, shape.leaves), (128, 128));
+    assert_eq!(w.info().block_count, 128);
     // The SAH splits the grid into a perfect binary tree of depth 7; the
-    // collapse takes two binary levels a node: 1 + 4 + 16 + 64 nodes, the
+    // collapse takes three binary levels a node: 1 + 8 + 64 nodes, the
     // last level's holding two leaves each.
-    assert_eq!((shape.nodes, shape.depth), (85, 3));
+    assert_eq!((shape.nodes, shape.depth), (73, 2));
     assert!(w.parts().0.iter().all(|n| n.len() == WIDTH || n.len() == 2));
 }
 
 /// A build fits in exactly the requirements and refuses one node or one
-/// block of corners less.
+/// leaf block less.
 #[test]
 fn exact_fit_and_one_less() {
     let mut rng = Rng(8);
     let o = random_scene(&mut rng, 300, 40, 40, 5.0);
     let scene = o.scene();
     let req = wide::requirements(scene.prim_count());
-    for (less_nodes, less_corners) in [(0, 0), (1, 0), (0, 1)] {
+    for (less_nodes, less_blocks) in [(0, 0), (1, 0), (0, 1)] {
         let mut nodes = vec![WideNode::default(); req.nodes - less_nodes];
         let mut refs = vec![0u32; req.refs];
-        let mut corners = vec![wide::corners::NAN_BLOCK; req.corners - less_corners];
+        let mut blocks = vec![wide::EMPTY_BLOCK; req.blocks - less_blocks];
         let mut bvh_nodes = vec![coray::bvh::BvhNode::default(); req.bvh_nodes];
         let mut boxes = vec![Aabb::EMPTY; req.boxes];
         let mut keys = vec![0.0; req.keys];
@@ -414,17 +437,17 @@ fn exact_fit_and_one_less() {
             2,
             WideStorage {
                 nodes: &mut nodes,
-                refs: &mut refs,
-                corners: &mut corners,
+                blocks: &mut blocks,
             },
             WideScratch {
+                refs: &mut refs,
                 bvh_nodes: &mut bvh_nodes,
                 boxes: &mut boxes,
                 keys: &mut keys,
                 links: &mut links,
             },
         );
-        match (less_nodes, less_corners) {
+        match (less_nodes, less_blocks) {
             (0, 0) => {
                 let w = r.unwrap();
                 w.validate().unwrap();
@@ -437,7 +460,7 @@ fn exact_fit_and_one_less() {
             _ => assert!(matches!(
                 r.map(|_| ()),
                 Err(Error::SliceTooSmall {
-                    slice: "corners",
+                    slice: "blocks",
                     ..
                 })
             )),

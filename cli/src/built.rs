@@ -17,7 +17,7 @@ enum Inner<'s> {
     KdC(coray_ffi::through_c::CKdTree<'s>, crate::method::CCalls),
     WideC(coray_ffi::through_c::CWide<'s>, crate::method::CCalls),
     Bvh(OwnedBvh),
-    Wide(OwnedWide),
+    Wide(OwnedWide, bool),
     Proj(Box<ProjRig<'s>>),
     #[cfg(feature = "embree")]
     Embree(coray_embree::EmbreeScene, bool),
@@ -133,13 +133,13 @@ impl<'s> Built<'s> {
                 b.bytes = Some(o.bytes());
                 b.inner = Inner::Bvh(o);
             }
-            Method::Wide { leaf_size } => {
+            Method::Wide { leaf_size, packets } => {
                 let mut o = OwnedWide::with_room(scene.prim_count());
                 let t = Instant::now();
                 o.build(&scene, leaf_size).map_err(err)?;
                 b.build_ms = ms(t);
                 b.bytes = Some(o.bytes());
-                b.inner = Inner::Wide(o);
+                b.inner = Inner::Wide(o, packets);
             }
             Method::Proj(m) => {
                 let rig = ProjRig::for_mesh(mesh, m)?;
@@ -189,9 +189,9 @@ impl<'s> Built<'s> {
                 method: (),
                 bounds: self.bounds,
             }),
-            Inner::Wide(o) => v.visit(&AccelShooter {
-                accel: o.view(self.scene).expect("just built"),
-                method: (),
+            Inner::Wide(o, packets) => v.visit(&crate::shoot::WideShooter {
+                wide: o.view(self.scene).expect("just built"),
+                packets: *packets,
                 bounds: self.bounds,
             }),
             Inner::Proj(rig) => v.visit(rig.as_ref()),

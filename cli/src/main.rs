@@ -250,7 +250,7 @@ fn render_spd(
 /// text and the error list both come from here.
 const TABLES: [(&str, &str); 8] = [
     ("build", "build ms and bytes per primitive of kd-auto, kd-paper, tdbs-sah, wide and Embree (1 thread and --threads N), builders interleaved, and the primary rays at --res through kd-auto's tree and Embree's; SCENE as for speed"),
-    ("speed", "every method's Mrays/s per ray set against Embree's one-ray and packet calls; SCENE a list, `spd:all` or default the eight SPD scenes and random; at 1 thread and at --threads N"),
+    ("speed", "every method's Mrays/s per ray set against Embree's one-ray and packet calls; SCENE a list, `spd:all` or default the eight SPD scenes and random; at 1 thread and at --threads N; --methods picks the coray methods (the casts run only by default)"),
     ("lcts", "Havran and Bittner's Table 2: SCENE may be a comma-separated list, or `spd:all`"),
     ("lcts-res", "their Table 3: SCENE (default spd:teapot) at 256 to --max-res pixels square"),
     ("bvh", "the thesis' hierarchy metrics per builder on SCENE (6.3.1)"),
@@ -430,20 +430,21 @@ fn run(command: Command, floor_split: u32) -> Result<i32, String> {
                     "--plot and --max-size go with --table bvh-series or proj-series".into(),
                 );
             }
-            if methods.is_some() && table.is_some() {
+            if methods.is_some() && table.as_deref().is_some_and(|t| t != "speed") {
                 return Err(
-                    "--methods and --table do not go together: a table has its methods".into(),
+                    "--methods goes with no --table or with --table speed: other tables have their methods".into(),
                 );
             }
+            let methods = methods
+                .map(|v| {
+                    v.iter()
+                        .map(|m| Method::parse(m))
+                        .collect::<Result<Vec<_>, _>>()
+                })
+                .transpose()?;
             match table {
                 None => {
-                    let methods = match methods {
-                        Some(v) => v
-                            .iter()
-                            .map(|m| Method::parse(m))
-                            .collect::<Result<_, _>>()?,
-                        None => Method::all(),
-                    };
+                    let methods = methods.unwrap_or_else(Method::all);
                     let s = load_square(&scene, res, &opts)?;
                     let rows = bench::bench(&s, &methods, &set)?;
                     if json {
@@ -452,9 +453,16 @@ fn run(command: Command, floor_split: u32) -> Result<i32, String> {
                         bench::report::print_table(&s, &rows, set.threads);
                     }
                 }
-                Some(t) => {
-                    paper_table(&t, &scene, res, max_res, max_size, plot, json, &set, &opts)?
-                }
+                Some(t) => paper_table(
+                    &t,
+                    &scene,
+                    (res, max_res, max_size),
+                    plot,
+                    json,
+                    &set,
+                    methods.as_deref(),
+                    &opts,
+                )?,
             }
             Ok(0)
         }
@@ -557,12 +565,11 @@ fn status_text(s: coray_ffi::CorayStatus) -> String {
 fn paper_table(
     table: &str,
     scene: &str,
-    res: u64,
-    max_res: u32,
-    max_size: Option<u32>,
+    (res, max_res, max_size): (u64, u32, Option<u32>),
     plot: Option<PathBuf>,
     json: bool,
     set: &Settings,
+    methods: Option<&[Method]>,
     opts: &Options,
 ) -> Result<(), String> {
     let one = Settings { threads: 1, ..*set };
@@ -591,7 +598,7 @@ fn paper_table(
             let mut rows = Vec::new();
             for name in &scenes {
                 let s = load_square(name, res, opts)?;
-                rows.extend(bench::speed::run(&s, set, &counts)?);
+                rows.extend(bench::speed::run(&s, set, &counts, methods)?);
             }
             if json {
                 println!(

@@ -175,10 +175,12 @@ pub enum Method {
         /// How it is built.
         build: BvhBuild,
     },
-    /// The wide (4-ary) hierarchy collapsed from the binary SAH one.
+    /// The wide (8-ary) hierarchy collapsed from the binary SAH one.
     Wide {
         /// Most primitives per leaf entry.
         leaf_size: u32,
+        /// Arrays traced in packets of eight coherent rays (`wide-packet`).
+        packets: bool,
     },
     /// Projection hierarchies (camera, light planes) and a global 3D one.
     Proj(ProjMethod),
@@ -206,6 +208,7 @@ impl Method {
                 .map(|&(name, build)| Method::Bvh { name, build }),
         );
         v.push(Method::wide());
+        v.push(Method::wide_packets());
         if cfg!(feature = "embree") {
             v.push(Method::Embree(EmbreeCall::One));
             v.push(Method::Embree(EmbreeCall::Eight));
@@ -225,6 +228,15 @@ impl Method {
     pub fn wide() -> Method {
         Method::Wide {
             leaf_size: WIDE_LEAF_SIZE,
+            packets: false,
+        }
+    }
+
+    /// The wide hierarchy tracing arrays in packets of eight.
+    pub fn wide_packets() -> Method {
+        Method::Wide {
+            leaf_size: WIDE_LEAF_SIZE,
+            packets: true,
         }
     }
 
@@ -284,7 +296,7 @@ impl Method {
     pub fn help() -> String {
         let names: Vec<String> = Method::all().iter().map(|m| m.to_string()).collect();
         format!(
-            "{}, kd-paper, kd-paper-rope, kd-paper-packet, kd-compact, kd-compact-packet, kd-c, kd-c1, kd-c1-handle, wide-c, wide-c1, wide-c1-handle, \
+            "{}, kd-paper, kd-paper-rope, kd-paper-packet, kd-compact, kd-compact-packet, kd-c, kd-c1, kd-c1-handle, wide-packet, wide-c, wide-c1, wide-c1-handle, \
              slcts1d:N, slcts2d:NxM, wide:N, \
              and proj-BUILDER-CRITERIA-SCHEME (BUILDER {}, CRITERIA 2d|dummy, SCHEME 2d|3d|comb)",
             names.join(", "),
@@ -319,6 +331,7 @@ impl Method {
             "hlcts2d" => return cast(Scheme::Hlcts2d),
             "cast-packets" => return cast(Scheme::Packets),
             "wide" => return Some(Method::wide()),
+            "wide-packet" => return Some(Method::wide_packets()),
             "embree" => return Some(Method::Embree(EmbreeCall::One)),
             "embree8" => return Some(Method::Embree(EmbreeCall::Eight)),
             _ => {}
@@ -335,7 +348,10 @@ impl Method {
         }
         if let Some(n) = s.strip_prefix("wide:") {
             let leaf_size = n.parse::<u32>().ok().filter(|&n| (1..=64).contains(&n))?;
-            return Some(Method::Wide { leaf_size });
+            return Some(Method::Wide {
+                leaf_size,
+                packets: false,
+            });
         }
         if let Some(nm) = s.strip_prefix("slcts2d:") {
             let (n, m) = nm.split_once('x')?;
@@ -431,8 +447,20 @@ impl fmt::Display for Method {
             Method::Bvh { name, .. } => f.write_str(name),
             Method::Wide {
                 leaf_size: WIDE_LEAF_SIZE,
+                packets: false,
             } => f.write_str("wide"),
-            Method::Wide { leaf_size } => write!(f, "wide:{leaf_size}"),
+            Method::Wide {
+                leaf_size: WIDE_LEAF_SIZE,
+                packets: true,
+            } => f.write_str("wide-packet"),
+            Method::Wide {
+                leaf_size,
+                packets: false,
+            } => write!(f, "wide:{leaf_size}"),
+            Method::Wide {
+                leaf_size,
+                packets: true,
+            } => write!(f, "wide-packet:{leaf_size}"),
             Method::Proj(p) => {
                 let c = match p.criteria {
                     Criteria::TwoD => "2d",
@@ -466,7 +494,10 @@ mod tests {
         all.push(Method::Cast {
             scheme: Scheme::Slcts1d { n: 9 },
         });
-        all.push(Method::Wide { leaf_size: 8 });
+        all.push(Method::Wide {
+            leaf_size: 8,
+            packets: false,
+        });
         for m in [
             "kd-paper",
             "kd-paper-rope",

@@ -186,6 +186,76 @@ impl Shooter for KdPacketShooter<'_> {
     }
 }
 
+/// The wide hierarchy with the widest kernel the CPU runs (AVX2 or the
+/// baseline, chosen by coray-ffi).
+pub struct WideShooter<'a> {
+    /// The hierarchy.
+    pub wide: coray::wide::WideBvh<'a>,
+    /// Arrays in packets of eight.
+    pub packets: bool,
+    /// Its scene's box.
+    pub bounds: Aabb,
+}
+
+impl Shooter for WideShooter<'_> {
+    type Ctx = Vec<coray::wide::WideStackItem>;
+
+    fn ctx(&self) -> Self::Ctx {
+        coray::owned::stack(self.wide.stack_len())
+    }
+
+    fn intersect(&self, ray: &Ray, ctx: &mut Self::Ctx, st: &mut TraceStats) -> Hit {
+        coray_ffi::simd::wide_intersect(&self.wide, ray, ctx, st)
+    }
+
+    fn occluded(
+        &self,
+        ray: &Ray,
+        _: Option<usize>,
+        ctx: &mut Self::Ctx,
+        st: &mut TraceStats,
+    ) -> bool {
+        coray_ffi::simd::wide_occluded(&self.wide, ray, ctx, st)
+    }
+
+    fn intersect_all(
+        &self,
+        rays: &[Ray],
+        out: &mut [Hit],
+        ctx: &mut Self::Ctx,
+        st: &mut TraceStats,
+    ) {
+        if self.packets {
+            coray_ffi::simd::wide_intersect_packets(&self.wide, rays, out, ctx, st);
+            return;
+        }
+        for (r, o) in rays.iter().zip(out.iter_mut()) {
+            *o = coray_ffi::simd::wide_intersect(&self.wide, r, ctx, st);
+        }
+    }
+
+    fn occluded_all(
+        &self,
+        rays: &[Ray],
+        _: Option<&[usize]>,
+        out: &mut [bool],
+        ctx: &mut Self::Ctx,
+        st: &mut TraceStats,
+    ) {
+        if self.packets {
+            coray_ffi::simd::wide_occluded_packets(&self.wide, rays, out, ctx, st);
+            return;
+        }
+        for (r, o) in rays.iter().zip(out.iter_mut()) {
+            *o = coray_ffi::simd::wide_occluded(&self.wide, r, ctx, st);
+        }
+    }
+
+    fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+}
+
 /// A kd-tree or the wide hierarchy traced through the C ABI: one call per
 /// ray (on a tracer per thread, or with the handle and stack), or one
 /// array call per chunk of rays (the harness's chunks). Statistics stay 0:

@@ -570,7 +570,7 @@ fn bad_inputs_get_a_message_and_status_2() {
         ),
         (
             &["bench", "--table", "lcts", "--methods", "kd"],
-            "do not go together",
+            "other tables have their methods",
         ),
     ];
     for (args, want) in cases {

@@ -52,6 +52,7 @@ unsafe impl Plain for coray::proj::layout::ProjArenaHeader {}
 unsafe impl Plain for coray::proj::Rect {}
 unsafe impl Plain for coray::wide::WideNode {}
 unsafe impl Plain for coray::Corners4 {}
+unsafe impl Plain for coray::wide::LeafBlock {}
 unsafe impl Plain for coray::wide::WideStackItem {}
 unsafe impl Plain for coray::wide::layout::WideArenaHeader {}
 
@@ -77,11 +78,15 @@ const _: () = {
     assert!(size_of::<coray::proj::Rect>() == 20 && align_of::<coray::proj::Rect>() == 4);
     assert!(size_of::<coray::Corners4>() == 144 && align_of::<coray::Corners4>() == 4);
     assert!(
-        size_of::<coray::wide::WideNode>() == 128
+        size_of::<coray::wide::LeafBlock>() == 160
+            && align_of::<coray::wide::LeafBlock>() <= ARENA_ALIGN
+    );
+    assert!(
+        size_of::<coray::wide::WideNode>() == 224
             && align_of::<coray::wide::WideNode>() <= ARENA_ALIGN
     );
-    assert!(size_of::<coray::wide::WideStackItem>() == 12);
-    assert!(size_of::<coray::wide::layout::WideArenaHeader>() == 68);
+    assert!(size_of::<coray::wide::WideStackItem>() == 8);
+    assert!(size_of::<coray::wide::layout::WideArenaHeader>() == 64);
 };
 
 /// A byte range `[start, end)` that one call reads or writes (its end

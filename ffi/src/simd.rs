@@ -12,6 +12,7 @@ use coray::kd::{KdStackItem, KdTree};
 use coray::lcts::guide::Paths;
 use coray::lcts::window::{self, Baseline, Kernel, Shaft};
 use coray::lcts::{CastStats, ImageScratch, PixelRect, Scheme};
+use coray::wide::{WideBvh, WideStackItem};
 use coray::{Camera, Error, Hit, Ray, TraceStats};
 
 /// Whether this CPU runs the AVX2 kernels and the environment lets them
@@ -24,7 +25,7 @@ pub fn has_avx2() -> bool {
         *CHOICE.get_or_init(|| {
             avx2_allowed(
                 std::env::var_os("CORAY_NO_AVX2").is_some(),
-                std::is_x86_feature_detected!("avx2"),
+                cpu_has_avx2_set(),
             )
         })
     }
@@ -32,6 +33,18 @@ pub fn has_avx2() -> bool {
     {
         false
     }
+}
+
+/// Whether the CPU runs every feature the AVX2 kernels are compiled for:
+/// AVX2 and the bit instructions every AVX2 CPU has (BMI1, BMI2, LZCNT,
+/// POPCNT: x86-64-v3's integer part).
+#[cfg(all(feature = "std", target_arch = "x86_64"))]
+fn cpu_has_avx2_set() -> bool {
+    std::is_x86_feature_detected!("avx2")
+        && std::is_x86_feature_detected!("bmi1")
+        && std::is_x86_feature_detected!("bmi2")
+        && std::is_x86_feature_detected!("lzcnt")
+        && std::is_x86_feature_detected!("popcnt")
 }
 
 /// The AVX2 kernels run when the CPU has AVX2 and the caller did not opt
@@ -80,6 +93,87 @@ pub fn occluded_packets(
         return;
     }
     t.occluded_packets(rays, occluded, stack, stats);
+}
+
+/// [`WideBvh::intersect`] with the widest kernel this CPU runs.
+#[inline]
+pub fn wide_intersect(
+    w: &WideBvh,
+    ray: &Ray,
+    stack: &mut [WideStackItem],
+    stats: &mut TraceStats,
+) -> Hit {
+    #[cfg(all(feature = "std", target_arch = "x86_64"))]
+    if has_avx2() {
+        // SAFETY: the CPU has AVX2 (checked just above), the only feature
+        // the clone is compiled for; otherwise it is a safe function.
+        return unsafe { w.intersect_avx2(ray, stack, stats) };
+    }
+    w.intersect(ray, stack, stats)
+}
+
+/// [`WideBvh::occluded`] with the widest kernel this CPU runs.
+#[inline]
+pub fn wide_occluded(
+    w: &WideBvh,
+    ray: &Ray,
+    stack: &mut [WideStackItem],
+    stats: &mut TraceStats,
+) -> bool {
+    #[cfg(all(feature = "std", target_arch = "x86_64"))]
+    if has_avx2() {
+        // SAFETY: as in wide_intersect.
+        return unsafe { w.occluded_avx2(ray, stack, stats) };
+    }
+    w.occluded(ray, stack, stats)
+}
+
+/// Closest hits of `rays` into `hits` in packets of eight coherent rays
+/// where this CPU runs the packet kernel (AVX2), ray by ray otherwise: each
+/// hit [`WideBvh::intersect`]'s.
+///
+/// # Panics
+/// When `hits` is shorter than `rays`.
+pub fn wide_intersect_packets(
+    w: &WideBvh,
+    rays: &[Ray],
+    hits: &mut [Hit],
+    stack: &mut [WideStackItem],
+    stats: &mut TraceStats,
+) {
+    #[cfg(all(feature = "std", target_arch = "x86_64"))]
+    if has_avx2() {
+        // SAFETY: the CPU runs the kernel's features (checked just above);
+        // otherwise it is a safe function.
+        unsafe { w.intersect_packets_avx2(rays, hits, stack, stats) };
+        return;
+    }
+    for (r, h) in rays.iter().zip(&mut hits[..rays.len()]) {
+        *h = w.intersect(r, stack, stats);
+    }
+}
+
+/// Any-hit answers of `rays` into `occluded`, in packets as
+/// [`wide_intersect_packets`].
+///
+/// # Panics
+/// When `occluded` is shorter than `rays`.
+pub fn wide_occluded_packets(
+    w: &WideBvh,
+    rays: &[Ray],
+    occluded: &mut [bool],
+    stack: &mut [WideStackItem],
+    stats: &mut TraceStats,
+) {
+    #[cfg(all(feature = "std", target_arch = "x86_64"))]
+    if has_avx2() {
+        // SAFETY: as in wide_intersect_packets.
+        unsafe { w.occluded_packets_avx2(rays, occluded, stack, stats) };
+        return;
+    }
+    for (r, o) in rays.iter().zip(&mut occluded[..rays.len()]) {
+        *o = w.occluded(r, stack, stats);
+    }
 }
 
 /// The LCTS window trace's AVX2 clone (`coray::lcts::window::trace_avx2`)
@@ -233,7 +327,7 @@ mod tests {
         #[cfg(target_arch = "x86_64")]
         assert_eq!(
             has_avx2(),
-            std::env::var_os("CORAY_NO_AVX2").is_none() && std::is_x86_feature_detected!("avx2")
+            std::env::var_os("CORAY_NO_AVX2").is_none() && cpu_has_avx2_set()
         );
     }
 

@@ -16,8 +16,8 @@ use coray::wide::layout::{
     WideArenaHeader, WideArenaLayout, WideScratchLayout, WIDE_HEADER_BYTES, WIDE_MAGIC,
     WIDE_VERSION,
 };
-use coray::wide::{self, WideBvh, WideNode, WideStackItem, WIDTH};
-use coray::{Aabb, Corners4, Scene, TraceStats};
+use coray::wide::{self, LeafBlock, WideBvh, WideNode, WideStackItem};
+use coray::{Aabb, Scene, TraceStats};
 use core::ffi::c_void;
 use core::mem::size_of;
 
@@ -114,9 +114,7 @@ fn layouts(n: usize) -> Result<(WideArenaLayout, WideScratchLayout), CorayStatus
 /// Stack entries a wide hierarchy over `n` primitives may need: its depth
 /// is below that of the binary hierarchy (at most `n - 1`).
 fn stack_bound(n: usize) -> usize {
-    n.saturating_sub(1)
-        .saturating_mul(WIDTH - 1)
-        .saturating_add(WIDTH)
+    wide::stack_len_for_depth(n.saturating_sub(1))
 }
 
 /// Arena, scratch and stack sizes for a wide hierarchy over `prim_count`
@@ -205,24 +203,21 @@ pub unsafe extern "C" fn coray_wide_build(
         // its arena (checked above), its parts do not overlap (layout
         // formulas) and the arenas overlap neither each other nor the
         // scene (Regions); the caller lends both exclusively for the call.
-        let (nodes, refs, corners, boxes, keys, links, bvh_nodes) = unsafe {
+        let (nodes, blocks, refs, boxes, keys, links, bvh_nodes) = unsafe {
             carve::zero(base, arena_l.total_bytes);
             (
                 carve::arena_mut::<WideNode>(base, arena_l.nodes_offset, arena_l.nodes),
-                carve::arena_mut::<u32>(base, arena_l.refs_offset, arena_l.refs),
-                carve::arena_mut::<Corners4>(base, arena_l.corners_offset, arena_l.corners),
+                carve::arena_mut::<LeafBlock>(base, arena_l.blocks_offset, arena_l.blocks),
+                carve::arena_mut::<u32>(sbase, scratch_l.refs_offset, c.refs),
                 carve::arena_mut::<Aabb>(sbase, 0, c.boxes),
                 carve::arena_mut::<f32>(sbase, scratch_l.keys_offset, c.keys),
                 carve::arena_mut::<u32>(sbase, scratch_l.links_offset, c.links),
                 carve::arena_mut::<BvhNode>(sbase, scratch_l.bvh_nodes_offset, c.bvh_nodes),
             )
         };
-        let storage = wide::WideStorage {
-            nodes,
-            refs,
-            corners,
-        };
+        let storage = wide::WideStorage { nodes, blocks };
         let scratch = wide::WideScratch {
+            refs,
             bvh_nodes,
             boxes,
             keys,
@@ -247,8 +242,7 @@ pub unsafe extern "C" fn coray_wide_build(
                 info,
                 layout_bytes: used.total_bytes as u32,
                 nodes_cap: used.nodes as u32,
-                refs_cap: used.refs as u32,
-                corners_cap: used.corners as u32,
+                blocks_cap: used.blocks as u32,
             }
         };
         Ok(())
@@ -289,8 +283,7 @@ pub unsafe extern "C" fn coray_wide_open(
         let mut hd = Handle::new(KIND_WIDE, base as usize, l.total_bytes, &scene);
         hd.set_part::<WideArenaHeader>(0, 0, 1)?;
         hd.set_part::<WideNode>(1, l.nodes_offset, l.nodes)?;
-        hd.set_part::<u32>(2, l.refs_offset, l.refs)?;
-        hd.set_part::<Corners4>(3, l.corners_offset, l.corners)?;
+        hd.set_part::<LeafBlock>(2, l.blocks_offset, l.blocks)?;
         let words = hd.words();
         // SAFETY: the handle describes the arena just checked, readable.
         unsafe { view_of(Sealed::new(&words, KIND_WIDE)?, scene)? };
@@ -315,8 +308,7 @@ unsafe fn view_of<'a>(
         let w = WideBvh::from_parts(
             scene,
             h.part::<WideNode>(1),
-            h.part::<u32>(2),
-            h.part::<Corners4>(3),
+            h.part::<LeafBlock>(2),
             header.info,
         )?;
         Ok((header, w))
@@ -414,8 +406,8 @@ pub unsafe extern "C" fn coray_wide_validate(
 }
 
 /// The body of the array trace entry points: checks the handle, the
-/// arrays, the stack and the statistics first, then writes `answer` for
-/// each ray.
+/// arrays, the stack and the statistics first, then has `answer` write
+/// the answers of the rays (the caller's array, in place), in chunks.
 ///
 /// Safety: as `coray_wide_intersect`, with `out` holding `count` `O`s.
 #[allow(clippy::too_many_arguments)]
@@ -427,7 +419,7 @@ unsafe fn batch<O>(
     stack: *mut c_void,
     stack_bytes: usize,
     stats: *mut CorayTraceStats,
-    answer: impl Fn(&WideBvh, &coray::Ray, &mut [WideStackItem], &mut TraceStats) -> O,
+    answer: impl Fn(&WideBvh, &[coray::Ray], &mut [O], &mut [WideStackItem], &mut TraceStats),
 ) -> CorayStatus {
     guard(|| {
         let mut regions = Regions::new();
@@ -444,8 +436,9 @@ unsafe fn batch<O>(
         };
         regions.check()?;
         let mut st = TraceStats::default();
-        for (r, o) in rays.iter().zip(out.iter_mut()) {
-            *o = answer(&w, &r.into(), stk, &mut st);
+        let rays = crate::abi::core_rays(rays);
+        for (r, o) in rays.chunks(CHUNK).zip(out.chunks_mut(CHUNK)) {
+            answer(&w, r, o, stk, &mut st);
         }
         if st.faults > 0 {
             return Err(CorayStatus::CorruptArena);
@@ -454,6 +447,10 @@ unsafe fn batch<O>(
         Ok(())
     })
 }
+
+/// Rays an array call hands the kernels at a time: whole packets, and few
+/// enough that the any-hit answers fit on the stack.
+const CHUNK: usize = 64;
 
 /// The body of the one-ray entry points: [`one_ray`] on a wide
 /// hierarchy, writing `answer` for the ray.
@@ -488,7 +485,10 @@ unsafe fn one<O>(
     })
 }
 
-/// Closest hits of `count` rays: `hits[i]` for `rays[i]`. `stack` is the
+/// Closest hits of `count` rays: `hits[i]` for `rays[i]`. Runs of eight
+/// rays that agree on their direction signs (camera tiles, shadow rays
+/// towards one light) are traced together in packets where the CPU has
+/// AVX2; the answers are the one-ray calls' either way. `stack` is the
 /// caller's traversal stack of `stack_bytes` (at least the info's
 /// `stack_bytes`, 16-byte aligned; one per thread). `stats` may be NULL.
 /// Many threads may trace one hierarchy at once, each with its own stack.
@@ -516,7 +516,9 @@ pub unsafe extern "C" fn coray_wide_intersect(
             stack,
             stack_bytes,
             stats,
-            |w, r, s, st| w.intersect(r, s, st).into(),
+            |w, r, o, s, st| {
+                crate::simd::wide_intersect_packets(w, r, crate::abi::core_hits(o), s, st)
+            },
         )
     }
 }
@@ -541,7 +543,7 @@ pub unsafe extern "C" fn coray_wide_intersect1(
     // SAFETY: forwarded caller contract.
     unsafe {
         one(wide, ray, hit, stack, stack_bytes, stats, |w, r, s, st| {
-            w.intersect(r, s, st).into()
+            crate::simd::wide_intersect(w, r, s, st).into()
         })
     }
 }
@@ -571,7 +573,14 @@ pub unsafe extern "C" fn coray_wide_occluded(
             stack,
             stack_bytes,
             stats,
-            |w, r, s, st| w.occluded(r, s, st) as u8,
+            |w, r, o, s, st| {
+                let mut occ = [false; CHUNK];
+                let occ = &mut occ[..r.len()];
+                crate::simd::wide_occluded_packets(w, r, occ, s, st);
+                for (b, &x) in o.iter_mut().zip(occ.iter()) {
+                    *b = x as u8;
+                }
+            },
         )
     }
 }
@@ -602,7 +611,7 @@ pub unsafe extern "C" fn coray_wide_occluded1(
             stack,
             stack_bytes,
             stats,
-            |w, r, s, st| w.occluded(r, s, st) as u8,
+            |w, r, s, st| crate::simd::wide_occluded(w, r, s, st) as u8,
         )
     }
 }
@@ -696,7 +705,7 @@ pub unsafe extern "C" fn coray_wide_tracer_intersect1(
                 ray,
                 hit,
                 #[inline(always)]
-                |x, r, s, st| x.intersect(r, s, st).into(),
+                |x, r, s, st| crate::simd::wide_intersect(x, r, s, st).into(),
             )
         }
     })
@@ -722,7 +731,7 @@ pub unsafe extern "C" fn coray_wide_tracer_occluded1(
                 ray,
                 occluded,
                 #[inline(always)]
-                |x, r, s, st| x.occluded(r, s, st) as u8,
+                |x, r, s, st| crate::simd::wide_occluded(x, r, s, st) as u8,
             )
         }
     })

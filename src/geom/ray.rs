@@ -134,10 +134,25 @@ impl PreparedRay {
         PreparedRay::with_inverse(ray, inverse(ray.dir))
     }
 
+    /// [`PreparedRay::new`] without the frame the sphere and cone tests
+    /// work in (`dir_len`, `unit_dir`: NaN here), for walks over scenes of
+    /// triangles alone: a square root and three divisions fewer a ray.
+    /// The triangle test's constants are [`PreparedRay::new`]'s bit for bit.
+    #[inline(always)]
+    pub(crate) fn for_triangles(ray: &Ray) -> PreparedRay {
+        PreparedRay::with_frame::<false>(ray, inverse(ray.dir))
+    }
+
     /// [`PreparedRay::new`] with `inv_dir`, [`inverse`] of the ray's
     /// direction, computed before (by a walk that clipped the ray first).
     #[inline]
     pub(crate) fn with_inverse(ray: &Ray, inv_dir: Vec3) -> PreparedRay {
+        PreparedRay::with_frame::<true>(ray, inv_dir)
+    }
+
+    /// The constants; the sphere and cone frame only when `FRAME`.
+    #[inline(always)]
+    fn with_frame<const FRAME: bool>(ray: &Ray, inv_dir: Vec3) -> PreparedRay {
         let d = ray.dir;
         let a = d.abs();
         // The largest component's axis, x before y before z on ties, without
@@ -153,7 +168,11 @@ impl PreparedRay {
             core::mem::swap(&mut kx, &mut ky);
         }
         let s = div4([dk[kx], dk[ky], 1.0, 1.0], [dk[kz]; 4]);
-        let dir_len = crate::geom::lanes::sqrt_rn(d.length_squared());
+        let dir_len = if FRAME {
+            crate::geom::lanes::sqrt_rn(d.length_squared())
+        } else {
+            f32::NAN
+        };
         PreparedRay {
             origin: ray.origin,
             dir: d,

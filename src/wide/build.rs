@@ -1,12 +1,15 @@
 //! Collapsing a binary hierarchy into a wide one: each wide node takes its
 //! binary node's children and opens the interior entry of largest surface
 //! area until [`WIDTH`] entries are held (or opening any would exceed
-//! them), the usual way to derive a 4-wide hierarchy from a binary SAH one
+//! them), the usual way to derive an 8-wide hierarchy from a binary SAH one
 //! without losing its splits. Nodes are numbered breadth first, so a
 //! level's nodes and one node's children sit side by side and the order
-//! itself proves the tree ([`super::WideBvh::validate`]).
+//! itself proves the tree ([`super::WideBvh::validate`]). Each leaf's
+//! primitives are copied into its own blocks as its entry is made, so the
+//! blocks follow the leaves in the same breadth-first order.
 
-use super::node::{WideNode, LEAF_BIT, WIDTH};
+use super::block::{self, LeafBlock};
+use super::node::{leaf_entry, WideNode, LEAF_FIRST_MASK, MAX_LEAF_BLOCKS, WIDTH};
 use crate::bvh::{Bvh, BvhNode};
 use crate::Error;
 
@@ -14,8 +17,19 @@ use crate::Error;
 pub(super) struct Collapsed {
     pub nodes: usize,
     pub leaves: usize,
+    pub blocks: usize,
     /// Level of the deepest node (root: 0).
     pub depth: u32,
+}
+
+/// Wide nodes a collapse makes from a binary hierarchy of `leaves`
+/// non-empty leaves, at most: every node holds [`WIDTH`] entries but those
+/// whose entries are all leaves (two or more of them), so with `F` full
+/// nodes and `B` others, `leaves >= 7F + B + 1` and `B <= 7F + 1`, which
+/// gives `F + B <= (4 leaves - 1) / 7` (and one node for a leaf or an
+/// empty scene).
+pub const fn nodes_bound(leaves: usize) -> usize {
+    (leaves.saturating_mul(4) / 7).saturating_add(1)
 }
 
 /// Half the surface area of a binary node's box.
@@ -72,9 +86,15 @@ fn gather(bn: &[BvhNode], src: u32, out: &mut [u32; WIDTH]) -> Result<usize, Err
     }
 }
 
-/// Collapses the binary `bvh` into `out`, breadth first from node 0.
-pub(super) fn collapse(bvh: &Bvh, out: &mut [WideNode]) -> Result<Collapsed, Error> {
-    let (bn, _) = bvh.parts();
+/// Collapses the binary `bvh` into `out`, breadth first from node 0, each
+/// leaf's primitives copied into the next blocks of `blocks`.
+pub(super) fn collapse(
+    bvh: &Bvh,
+    out: &mut [WideNode],
+    blocks: &mut [LeafBlock],
+) -> Result<Collapsed, Error> {
+    let (bn, refs) = bvh.parts();
+    let scene = bvh.scene();
     let got = out.len();
     let room = |needed: usize| Error::SliceTooSmall {
         slice: "nodes",
@@ -89,6 +109,7 @@ pub(super) fn collapse(bvh: &Bvh, out: &mut [WideNode]) -> Result<Collapsed, Err
     out[0] = WideNode::default();
     out[0].child[0] = bvh.info().root;
     let (mut top, mut leaves, mut depth, mut level_end) = (1, 0, 0, 1);
+    let mut next_block = 0usize;
     let mut k = 0;
     while k < top {
         if k == level_end {
@@ -105,8 +126,31 @@ pub(super) fn collapse(bvh: &Bvh, out: &mut [WideNode]) -> Result<Collapsed, Err
                 if b.is_empty() {
                     continue;
                 }
-                node.child[used] = LEAF_BIT | b.first;
-                node.count[used] = b.len();
+                let run = refs
+                    .get(b.first as usize..(b.first + b.len()) as usize)
+                    .ok_or(Error::Corrupt {
+                        what: "binary leaf",
+                    })?;
+                let need = block::blocks_for(run.len());
+                let end = next_block + need;
+                if need > MAX_LEAF_BLOCKS || end > LEAF_FIRST_MASK as usize {
+                    return Err(Error::Corrupt {
+                        what: "binary leaf",
+                    });
+                }
+                let got = blocks.len();
+                let dst = blocks
+                    .get_mut(next_block..end)
+                    .ok_or(Error::SliceTooSmall {
+                        slice: "blocks",
+                        needed: end,
+                        got,
+                    })?;
+                for (d, prims) in dst.iter_mut().zip(run.chunks(block::BLOCK_SLOTS)) {
+                    *d = block::fill(scene, prims);
+                }
+                node.child[used] = leaf_entry(next_block as u32, need as u32);
+                next_block = end;
                 leaves += 1;
             } else {
                 if top == out.len() {
@@ -126,6 +170,7 @@ pub(super) fn collapse(bvh: &Bvh, out: &mut [WideNode]) -> Result<Collapsed, Err
     Ok(Collapsed {
         nodes: top,
         leaves,
+        blocks: next_block,
         depth,
     })
 }

@@ -1,21 +1,20 @@
-//! Byte layouts of wide hierarchy arenas: `[WideArenaHeader | refs |
-//! corners | nodes]`, and `[boxes | keys | links | binary nodes]` for the build's
-//! scratch. Counts in, bytes out, checked ([`crate::arena::Parts`]).
+//! Byte layouts of wide hierarchy arenas: `[WideArenaHeader | blocks |
+//! nodes]`, and `[boxes | keys | links | refs | binary nodes]` for the
+//! build's scratch. Counts in, bytes out, checked ([`crate::arena::Parts`]).
 //!
-//! The corner blocks and the nodes come last because their counts are
-//! known only after the build (the requirements bound the nodes at one
-//! per primitive, builds use about a quarter of that; the blocks at one
-//! per four primitives, a scene of spheres and cones uses none): the
-//! build moves the nodes down to the blocks it used
+//! The nodes come last because the counts of both parts are known only
+//! after the build (the requirements bound the nodes at
+//! [`super::nodes_bound`] of one leaf per primitive, builds use about a
+//! tenth of that; the blocks at one per primitive, builds use about a
+//! third): the build moves the nodes down to the blocks it used
 //! ([`WideArenaLayout::pack`]) and records its own counts as the
-//! capacities, so the arena it needs is a prefix of the one it was
-//! given, and a caller may keep only those bytes
-//! (`WideArenaLayout::total_bytes` of the recorded counts).
+//! capacities, so the arena it needs is a prefix of the one it was given,
+//! and a caller may keep only those bytes (`WideArenaLayout::total_bytes`
+//! of the recorded counts).
 
-use super::{WideInfo, WideNode, WideRequirements};
+use super::{LeafBlock, WideInfo, WideNode, WideRequirements};
 use crate::arena::Parts;
 use crate::bvh::BvhNode;
-use crate::geom::Corners4;
 use crate::{Aabb, Error};
 use core::mem::size_of;
 
@@ -24,67 +23,58 @@ pub const WIDE_HEADER_BYTES: usize = 128;
 
 /// Magic word of a wide hierarchy arena: "CRWB".
 pub const WIDE_MAGIC: u32 = u32::from_le_bytes(*b"CRWB");
-/// Layout version of [`WideArenaHeader`] and [`WideNode`] (2: the
-/// triangles' corner blocks after the references, their count in the
-/// header).
-pub const WIDE_VERSION: u32 = 2;
+/// Layout version of [`WideArenaHeader`], [`WideNode`] and [`LeafBlock`]
+/// (3: nodes of eight, each leaf's primitives in its own blocks).
+pub const WIDE_VERSION: u32 = 3;
 
 /// Where the parts of a wide hierarchy arena lie.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct WideArenaLayout {
     /// Node slots.
     pub nodes: usize,
-    /// Reference slots.
-    pub refs: usize,
-    /// Corner blocks.
-    pub corners: usize,
+    /// Leaf blocks.
+    pub blocks: usize,
     /// Offset of the nodes.
     pub nodes_offset: usize,
-    /// Offset of the references.
-    pub refs_offset: usize,
-    /// Offset of the corner blocks.
-    pub corners_offset: usize,
+    /// Offset of the blocks.
+    pub blocks_offset: usize,
     /// Bytes the layout covers.
     pub total_bytes: usize,
 }
 
 impl WideArenaLayout {
-    /// The layout holding `nodes` node slots, `refs` references and
-    /// `corners` corner blocks, or `None` past
-    /// [`crate::limits::MAX_ARENA_BYTES`].
-    pub fn of(nodes: usize, refs: usize, corners: usize) -> Option<WideArenaLayout> {
+    /// The layout holding `nodes` node slots and `blocks` leaf blocks, or
+    /// `None` past [`crate::limits::MAX_ARENA_BYTES`].
+    pub fn of(nodes: usize, blocks: usize) -> Option<WideArenaLayout> {
         const _: () = assert!(size_of::<WideArenaHeader>() <= WIDE_HEADER_BYTES);
         let mut p = Parts::after(WIDE_HEADER_BYTES);
-        let refs_offset = p.push::<u32>(refs)?;
-        let corners_offset = p.push::<Corners4>(corners)?;
+        let blocks_offset = p.push::<LeafBlock>(blocks)?;
         let nodes_offset = p.push::<WideNode>(nodes)?;
         Some(WideArenaLayout {
             nodes,
-            refs,
-            corners,
+            blocks,
             nodes_offset,
-            refs_offset,
-            corners_offset,
+            blocks_offset,
             total_bytes: p.total()?,
         })
     }
 
     /// The layout a build's arena starts with: room for `req`.
     pub fn for_build(req: &WideRequirements) -> Option<WideArenaLayout> {
-        WideArenaLayout::of(req.nodes, req.refs, req.corners)
+        WideArenaLayout::of(req.nodes, req.blocks)
     }
 
     /// Moves the nodes of a hierarchy with `info`, built in `arena` laid
     /// out as `self`, down to the layout holding exactly its nodes and
-    /// corner blocks (the references and blocks stay where they are), and
-    /// zeroes the rest of `self`'s bytes. `None` (nothing moved) when the
-    /// counts exceed this layout's or the arena is shorter than it.
+    /// blocks (the blocks stay where they are), and zeroes the rest of
+    /// `self`'s bytes. `None` (nothing moved) when the counts exceed this
+    /// layout's or the arena is shorter than it.
     pub fn pack(&self, info: &WideInfo, arena: &mut [u8]) -> Option<WideArenaLayout> {
-        let (nodes, blocks) = (info.node_count as usize, info.corner_blocks as usize);
-        if nodes > self.nodes || blocks > self.corners {
+        let (nodes, blocks) = (info.node_count as usize, info.block_count as usize);
+        if nodes > self.nodes || blocks > self.blocks {
             return None;
         }
-        let tight = WideArenaLayout::of(nodes, self.refs, blocks)?;
+        let tight = WideArenaLayout::of(nodes, blocks)?;
         let arena = arena.get_mut(..self.total_bytes)?;
         let bytes = nodes * size_of::<WideNode>();
         // The nodes' new place starts at or below their old one.
@@ -92,7 +82,7 @@ impl WideArenaLayout {
             self.nodes_offset..self.nodes_offset + bytes,
             tight.nodes_offset,
         );
-        let blocks_end = tight.corners_offset + blocks * size_of::<Corners4>();
+        let blocks_end = tight.blocks_offset + blocks * size_of::<LeafBlock>();
         arena[blocks_end..tight.nodes_offset].fill(0);
         arena[tight.nodes_offset + bytes..].fill(0);
         Some(tight)
@@ -102,12 +92,14 @@ impl WideArenaLayout {
 /// Where the parts of a wide build's scratch lie.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct WideScratchLayout {
-    /// Element counts (`nodes` and `refs` are the arena's).
+    /// Element counts (`nodes` and `blocks` are the arena's).
     pub counts: WideRequirements,
     /// Offset of the keys (the boxes are at 0).
     pub keys_offset: usize,
     /// Offset of the links.
     pub links_offset: usize,
+    /// Offset of the binary hierarchy's references.
+    pub refs_offset: usize,
     /// Offset of the binary hierarchy's nodes.
     pub bvh_nodes_offset: usize,
     /// Bytes the layout covers.
@@ -121,11 +113,13 @@ impl WideScratchLayout {
         p.push::<Aabb>(counts.boxes)?;
         let keys_offset = p.push::<f32>(counts.keys)?;
         let links_offset = p.push::<u32>(counts.links)?;
+        let refs_offset = p.push::<u32>(counts.refs)?;
         let bvh_nodes_offset = p.push::<BvhNode>(counts.bvh_nodes)?;
         Some(WideScratchLayout {
             counts: *counts,
             keys_offset,
             links_offset,
+            refs_offset,
             bvh_nodes_offset,
             total_bytes: p.total()?,
         })
@@ -149,10 +143,8 @@ pub struct WideArenaHeader {
     pub layout_bytes: u32,
     /// Node slots.
     pub nodes_cap: u32,
-    /// Reference slots.
-    pub refs_cap: u32,
-    /// Corner blocks.
-    pub corners_cap: u32,
+    /// Leaf blocks.
+    pub blocks_cap: u32,
 }
 
 impl WideArenaHeader {
@@ -168,11 +160,7 @@ impl WideArenaHeader {
         if self.version != WIDE_VERSION {
             return corrupt("version");
         }
-        let Some(l) = WideArenaLayout::of(
-            self.nodes_cap as usize,
-            self.refs_cap as usize,
-            self.corners_cap as usize,
-        ) else {
+        let Some(l) = WideArenaLayout::of(self.nodes_cap as usize, self.blocks_cap as usize) else {
             return corrupt("layout");
         };
         if l.total_bytes != self.layout_bytes as usize {
@@ -182,11 +170,7 @@ impl WideArenaHeader {
             return corrupt("arena shorter than its layout");
         }
         let i = &self.info;
-        if i.node_count == 0
-            || i.node_count > self.nodes_cap
-            || i.ref_count > self.refs_cap
-            || i.corner_blocks > self.corners_cap
-        {
+        if i.node_count == 0 || i.node_count > self.nodes_cap || i.block_count > self.blocks_cap {
             return corrupt("counts");
         }
         Ok(l)
@@ -199,65 +183,64 @@ mod tests {
 
     #[test]
     fn layouts_are_checked_and_aligned() {
-        let l = WideArenaLayout::of(3, 5, 2).unwrap();
-        assert_eq!(l.refs_offset, WIDE_HEADER_BYTES);
-        // The references (20 bytes) padded to 16 bytes, then two blocks of
-        // corners (2 x 144 bytes).
-        assert_eq!(l.corners_offset, WIDE_HEADER_BYTES + 32);
-        assert_eq!(l.nodes_offset, l.corners_offset + 2 * 144);
-        assert_eq!(l.total_bytes, l.nodes_offset + 3 * 128);
+        let l = WideArenaLayout::of(3, 2).unwrap();
+        assert_eq!(l.blocks_offset, WIDE_HEADER_BYTES);
+        assert_eq!(l.nodes_offset, l.blocks_offset + 2 * 160);
+        assert_eq!(l.total_bytes, l.nodes_offset + 3 * 224);
         // Fewer nodes: a prefix of the same arena.
-        let fewer = WideArenaLayout::of(1, 5, 2).unwrap();
+        let fewer = WideArenaLayout::of(1, 2).unwrap();
         assert_eq!(
-            (fewer.refs_offset, fewer.corners_offset, fewer.nodes_offset),
-            (l.refs_offset, l.corners_offset, l.nodes_offset)
+            (fewer.blocks_offset, fewer.nodes_offset),
+            (l.blocks_offset, l.nodes_offset)
         );
-        assert_eq!(fewer.total_bytes, l.total_bytes - 2 * 128);
-        assert!(WideArenaLayout::of(usize::MAX / 256, 1, 1).is_none());
+        assert_eq!(fewer.total_bytes, l.total_bytes - 2 * 224);
+        assert!(WideArenaLayout::of(usize::MAX / 512, 1).is_none());
         let mut h = WideArenaHeader {
             magic: WIDE_MAGIC,
             version: WIDE_VERSION,
             layout_bytes: l.total_bytes as u32,
             nodes_cap: 3,
-            refs_cap: 5,
-            corners_cap: 2,
+            blocks_cap: 2,
             ..Default::default()
         };
         h.info.node_count = 1;
         assert_eq!(h.layout(l.total_bytes), Ok(l));
         assert!(h.layout(l.total_bytes - 1).is_err());
-        h.info.corner_blocks = 3;
+        h.info.block_count = 3;
         assert!(h.layout(l.total_bytes).is_err());
-        h.info.corner_blocks = 2;
-        h.info.ref_count = 6;
+        h.info.block_count = 2;
+        h.info.node_count = 4;
+        assert!(h.layout(l.total_bytes).is_err());
+        h.info.node_count = 1;
+        h.version = 2;
         assert!(h.layout(l.total_bytes).is_err());
     }
 
     /// Packing moves the nodes down to the blocks in use, keeps the
-    /// references and blocks, and zeroes everything else.
+    /// blocks, and zeroes everything else.
     #[test]
     fn pack_moves_the_nodes_to_the_blocks_in_use() {
-        let l = WideArenaLayout::of(4, 9, 3).unwrap();
-        let mut arena = [0u8; 2048];
+        let l = WideArenaLayout::of(4, 3).unwrap();
+        let mut arena = [0u8; 4096];
         for (i, b) in arena[..l.total_bytes].iter_mut().enumerate() {
             *b = (i % 251) as u8 + 1;
         }
         let before = arena;
         let info = WideInfo {
             node_count: 2,
-            corner_blocks: 1,
+            block_count: 1,
             ..Default::default()
         };
         let t = l.pack(&info, &mut arena).unwrap();
-        assert_eq!(t, WideArenaLayout::of(2, 9, 1).unwrap());
-        assert_eq!(t.total_bytes, l.total_bytes - 2 * 128 - 2 * 144);
-        // References and the block in use where they were.
-        let kept = t.corners_offset + 144;
+        assert_eq!(t, WideArenaLayout::of(2, 1).unwrap());
+        assert_eq!(t.total_bytes, l.total_bytes - 2 * 224 - 2 * 160);
+        // The block in use where it was.
+        let kept = t.blocks_offset + 160;
         assert_eq!(arena[..kept], before[..kept]);
         // The two nodes from their old place.
         assert_eq!(
             arena[t.nodes_offset..t.total_bytes],
-            before[l.nodes_offset..l.nodes_offset + 2 * 128]
+            before[l.nodes_offset..l.nodes_offset + 2 * 224]
         );
         // Zero between and after.
         assert!(arena[kept..t.nodes_offset].iter().all(|&b| b == 0));

@@ -1,39 +1,44 @@
-//! Closest-hit and any-hit traversal: one slab test of a node's four boxes
-//! at once, entries hit pushed nearest last (closest hit) so the nearest
-//! is visited first, each leaf's triangles tested four at a time from its
-//! corner blocks and its spheres and cones one at a time, with the
+//! Closest-hit and any-hit traversal: one slab test of a node's eight
+//! boxes at once, entries hit pushed nearest last (closest hit) so the
+//! nearest is visited first, each leaf's triangles tested four at a time
+//! from its blocks and its spheres and cones one at a time, with the
 //! kd-tree's tests and tie rule, so the hits are the kd-tree's bit for bit.
 //!
-//! The box test is chosen once per ray: rays whose inverse direction is
-//! finite take the plain slab test; the others (a zero component, or a
-//! subnormal one whose inverse overflows) take one that decides those
-//! axes by the origin (on a face counts as inside), as the kd-tree's clip
-//! does, since `0 * inf` would be NaN on a face. Whether a walk reads
-//! ahead the entries it leaves on the stack is the hierarchy's
-//! ([`WideBvh::with_read_ahead`]), also chosen once per ray.
+//! What a walk does is chosen once per ray, outside the loop: the box
+//! test (rays whose inverse direction is finite read each axis' near and
+//! far face by the direction's sign; the others, a zero component or a
+//! subnormal one whose inverse overflows, decide those axes by the origin,
+//! on a face counting as inside, as the kd-tree's clip does, since `0 *
+//! inf` would be NaN on a face), whether leaves may hold spheres and
+//! cones, and whether the walk reads ahead the entries it leaves on the
+//! stack ([`WideBvh::with_read_ahead`]).
+//!
+//! Every kernel is compiled for the target's baseline and, on x86-64, once
+//! more with AVX2 ([`WideBvh::intersect_avx2`]): the same operations in
+//! the same order, so the same answers, one vector instruction per node
+//! plane.
 
-use super::node::{WideNode, EMPTY_SLOT, LEAF_BIT, WIDTH};
+use super::block::{LeafBlock, BLOCK_SLOTS, NO_PRIM};
+use super::node::{leaf_run, WideNode, EMPTY_SLOT, LEAF_BIT, LOWER, UPPER, WIDTH};
 use super::WideBvh;
-use crate::bvh::traverse::{push_nearest_last, Entered};
-use crate::geom::{leaf, Corners4, Hit, PreparedRay, Ray, TRI_LANES};
+use crate::geom::leaf::beats;
+use crate::geom::{intersect_triangles4, Hit, PreparedRay, Ray, GEOM_TRIANGLES};
 use crate::TraceStats;
 
 /// A traversal stack entry: a node's entry (an interior child, or a leaf's
-/// run of references) whose box the ray enters at `t`.
+/// run of blocks) whose box the ray enters at `t`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[repr(C)]
 pub struct WideStackItem {
     /// [`WideNode::child`] of the entry.
     pub child: u32,
-    /// [`WideNode::count`] of the entry.
-    pub count: u32,
     /// Entry distance into its box.
     pub t: f32,
 }
 
 /// Slack on the far distance so that rounding never loses a box the ray
 /// touches (Ize 2013: `1 + 2 gamma(3)`), as the binary hierarchies use.
-const FAR_SLACK: f32 = 1.0 + 4.0 * f32::EPSILON;
+pub(super) const FAR_SLACK: f32 = 1.0 + 4.0 * f32::EPSILON;
 
 /// What a walk does at a leaf and how far a box may lie.
 trait Query {
@@ -41,24 +46,77 @@ trait Query {
     const SORTED: bool;
     /// Boxes entered beyond this are skipped.
     fn limit(&self) -> f32;
-    /// Tests the primitives of reference slots `[first, first + count)`
-    /// of `w` (`others`: the scene has spheres or cones); `Some(true)`
-    /// stops the walk, `None` is a slot past the hierarchy's slices.
-    fn visit(
+    /// Tests the primitives of blocks `[first, first + count)` of `w`
+    /// (`OTHERS`: the scene has spheres or cones); `Some(true)` stops the
+    /// walk, `None` is a block past the hierarchy's.
+    fn visit<const OTHERS: bool>(
         &mut self,
         w: &WideBvh,
         r: &PreparedRay,
-        run: (usize, usize),
-        others: bool,
+        first: usize,
+        count: usize,
     ) -> Option<bool>;
+}
+
+/// The blocks `[first, first + count)` of `w`, or `None` past them.
+#[inline(always)]
+fn blocks_of<'a>(w: &WideBvh<'a>, first: usize, count: usize) -> Option<&'a [LeafBlock]> {
+    w.blocks.get(first..first.checked_add(count)?)
+}
+
+/// Slots of `b` that hold a sphere or a cone (a primitive past the
+/// scene's `triangles`).
+#[inline(always)]
+fn other_slots(b: &LeafBlock, triangles: usize) -> u32 {
+    let mut m = 0;
+    for (i, &p) in b.prims.iter().enumerate() {
+        m |= ((p != NO_PRIM && p as usize >= triangles) as u32) << i;
+    }
+    m
+}
+
+/// The set bits of `mask`, lowest first.
+#[inline(always)]
+fn bits(mut mask: u32) -> impl Iterator<Item = usize> {
+    core::iter::from_fn(move || {
+        (mask != 0).then(|| {
+            let i = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            i
+        })
+    })
 }
 
 struct Closest {
     best: Hit,
-    /// The ray's end until something is hit, then the best hit's `t`
-    /// (kept, not chosen at every box and test).
+    /// Block and slot of the best hit when a block's four-lane test found
+    /// it: its normal is made from the block's corners once, at the end.
+    from_block: Option<(usize, usize)>,
+    /// The ray's end until something is hit, then the best hit's `t`.
     limit: f32,
     tests: u64,
+}
+
+impl Closest {
+    /// Keeps `h` when it beats the best so far.
+    #[inline(always)]
+    fn offer(&mut self, h: Hit, at: Option<(usize, usize)>) {
+        if beats(&h, &self.best) {
+            self.best = h;
+            self.from_block = at;
+            self.limit = h.t;
+        }
+    }
+
+    /// The best hit, its normal made when a block found it.
+    fn finish(mut self, w: &WideBvh) -> Hit {
+        if let Some((b, slot)) = self.from_block {
+            let c = &w.blocks[b].corners;
+            let v = |k: usize| crate::Vec3::new(c[k][0][slot], c[k][1][slot], c[k][2][slot]);
+            self.best.ng = (v(0) - v(1)).cross(v(2) - v(0));
+        }
+        self.best
+    }
 }
 
 impl Query for Closest {
@@ -68,25 +126,50 @@ impl Query for Closest {
         self.limit
     }
     #[inline(always)]
-    fn visit(
+    fn visit<const OTHERS: bool>(
         &mut self,
         w: &WideBvh,
         r: &PreparedRay,
-        run: (usize, usize),
-        others: bool,
+        first: usize,
+        count: usize,
     ) -> Option<bool> {
-        self.tests += run.1 as u64;
-        let (scene, refs, blocks) = (&w.scene, w.refs, w.corners);
-        let whole = leaf::closest_in_blocks(scene, r, refs, blocks, run, others, &mut self.best);
-        if self.best.is_hit() {
-            self.limit = self.best.t;
+        let blocks = blocks_of(w, first, count)?;
+        let nt = w.scene.triangles.len();
+        for (j, b) in blocks.iter().enumerate() {
+            self.tests += b.prims.iter().filter(|&&p| p != NO_PRIM).count() as u64;
+            let h4 = intersect_triangles4(r, &b.corners, self.limit);
+            for slot in bits(h4.hit) {
+                let h = Hit {
+                    t: h4.t[slot],
+                    u: h4.u[slot],
+                    v: h4.v[slot],
+                    ng: crate::Vec3::ZERO,
+                    geom_id: GEOM_TRIANGLES,
+                    prim_id: b.prims[slot],
+                };
+                self.offer(h, Some((first + j, slot)));
+            }
+            // Slots on an edge in single precision, and spheres and cones:
+            // one at a time by the scene's own test.
+            let mut alone = h4.edge;
+            if OTHERS {
+                alone |= other_slots(b, nt);
+            }
+            for slot in bits(alone) {
+                let p = b.prims[slot];
+                if p == NO_PRIM {
+                    continue;
+                }
+                if let Some(h) = w.scene.intersect_prim(p as usize, r, self.limit) {
+                    self.offer(h, None);
+                }
+            }
         }
-        whole.then_some(false)
+        Some(false)
     }
 }
 
 struct Any {
-    hit: bool,
     t_max: f32,
     tests: u64,
 }
@@ -98,17 +181,33 @@ impl Query for Any {
         self.t_max
     }
     #[inline(always)]
-    fn visit(
+    fn visit<const OTHERS: bool>(
         &mut self,
         w: &WideBvh,
         r: &PreparedRay,
-        run: (usize, usize),
-        others: bool,
+        first: usize,
+        count: usize,
     ) -> Option<bool> {
-        self.tests += run.1 as u64;
-        let (scene, refs, blocks) = (&w.scene, w.refs, w.corners);
-        self.hit = leaf::any_in_blocks(scene, r, refs, blocks, run, others, self.t_max)?;
-        Some(self.hit)
+        let blocks = blocks_of(w, first, count)?;
+        let nt = w.scene.triangles.len();
+        for b in blocks {
+            self.tests += b.prims.iter().filter(|&&p| p != NO_PRIM).count() as u64;
+            let h4 = intersect_triangles4(r, &b.corners, self.t_max);
+            if h4.hit != 0 {
+                return Some(true);
+            }
+            let mut alone = h4.edge;
+            if OTHERS {
+                alone |= other_slots(b, nt);
+            }
+            for slot in bits(alone) {
+                let p = b.prims[slot];
+                if p != NO_PRIM && w.scene.intersect_prim(p as usize, r, self.t_max).is_some() {
+                    return Some(true);
+                }
+            }
+        }
+        Some(false)
     }
 }
 
@@ -116,6 +215,10 @@ impl Query for Any {
 struct Slabs {
     origin: [f32; 3],
     inv_dir: [f32; 3],
+    /// Per axis, the row of [`WideNode::planes`] the ray meets first (the
+    /// lower face when it moves up the axis) and last.
+    near: [usize; 3],
+    far: [usize; 3],
     /// Axes the ray is taken as parallel to: those whose inverse direction
     /// is infinite, as the kd-tree's clip takes them (`Aabb::clip_ray`).
     parallel: [bool; 3],
@@ -123,226 +226,50 @@ struct Slabs {
 
 impl Slabs {
     fn new(r: &PreparedRay) -> Slabs {
+        let inv_dir = r.inv_dir.to_array();
+        let down = inv_dir.map(|i| i < 0.0);
         Slabs {
             origin: r.origin.to_array(),
-            inv_dir: r.inv_dir.to_array(),
+            inv_dir,
+            near: [0, 1, 2].map(|a| if down[a] { UPPER + a } else { LOWER + a }),
+            far: [0, 1, 2].map(|a| if down[a] { LOWER + a } else { UPPER + a }),
             // A zero component, or one so small that its inverse
             // overflows: `(face - origin) * inf` is NaN on a face.
-            parallel: r.inv_dir.to_array().map(f32::is_infinite),
+            parallel: inv_dir.map(f32::is_infinite),
         }
     }
 
-    /// Entry and exit distances of the four boxes of `n`, clipped to
-    /// `[t0, t1]`: a box is hit when entry <= exit. `PARALLEL`: some axis
-    /// has a zero direction.
+    /// The slots of `n` whose boxes the ray enters within `[t0, t1]`, and
+    /// each slot's entry distance. `PARALLEL`: some axis' inverse
+    /// direction is infinite. An empty slot's box (+inf lower, -inf upper)
+    /// is never entered.
     #[inline(always)]
-    fn test<const PARALLEL: bool>(
-        &self,
-        n: &WideNode,
-        t0: f32,
-        t1: f32,
-    ) -> ([f32; WIDTH], [f32; WIDTH]) {
-        let (mut tn, mut tf) = ([t0; WIDTH], [t1; WIDTH]);
+    fn test<const PARALLEL: bool>(&self, n: &WideNode, t0: f32, t1: f32) -> (u32, [f32; WIDTH]) {
+        let mut tn = [t0; WIDTH];
+        let mut tf = [f32::INFINITY; WIDTH];
         for a in 0..3 {
             let (o, inv) = (self.origin[a], self.inv_dir[a]);
-            for i in 0..WIDTH {
-                let (near, far) = if PARALLEL && self.parallel[a] {
-                    if o >= n.min[a][i] && o <= n.max[a][i] {
-                        (f32::NEG_INFINITY, f32::INFINITY)
-                    } else {
-                        (f32::INFINITY, f32::NEG_INFINITY)
-                    }
-                } else {
-                    let l = (n.min[a][i] - o) * inv;
-                    let h = (n.max[a][i] - o) * inv;
-                    (fmin(l, h), fmax(l, h))
-                };
-                tn[i] = fmax(near, tn[i]);
-                tf[i] = fmin(far * FAR_SLACK, tf[i]);
-            }
-        }
-        (tn, tf)
-    }
-}
-
-impl Entered for WideStackItem {
-    #[inline(always)]
-    fn t(&self) -> f32 {
-        self.t
-    }
-}
-
-impl WideBvh<'_> {
-    /// Closest hit of `ray`, on the caller's `stack` of at least
-    /// [`WideBvh::stack_len`] entries (a shorter one stops the walk with
-    /// a fault counted in `stats`).
-    pub fn intersect(&self, ray: &Ray, stack: &mut [WideStackItem], stats: &mut TraceStats) -> Hit {
-        stats.rays += 1;
-        if !ray.is_valid() {
-            return Hit::MISS;
-        }
-        let r = PreparedRay::new(ray);
-        let mut q = Closest {
-            best: Hit::MISS,
-            limit: r.t_max,
-            tests: 0,
-        };
-        self.walk(&r, &mut q, stack, stats);
-        stats.prim_tests += q.tests;
-        q.best
-    }
-
-    /// Whether anything lies on `ray`'s segment; the stack as for
-    /// [`WideBvh::intersect`].
-    pub fn occluded(&self, ray: &Ray, stack: &mut [WideStackItem], stats: &mut TraceStats) -> bool {
-        stats.rays += 1;
-        if !ray.is_valid() {
-            return false;
-        }
-        let r = PreparedRay::new(ray);
-        let mut q = Any {
-            hit: false,
-            t_max: r.t_max,
-            tests: 0,
-        };
-        self.walk(&r, &mut q, stack, stats);
-        stats.prim_tests += q.tests;
-        q.hit
-    }
-
-    /// The box test and the read-ahead chosen once for the ray, then the
-    /// walk.
-    #[inline(always)]
-    fn walk<Q: Query>(
-        &self,
-        r: &PreparedRay,
-        q: &mut Q,
-        stack: &mut [WideStackItem],
-        stats: &mut TraceStats,
-    ) {
-        let slabs = Slabs::new(r);
-        // Rays with a parallel axis are rare: they walk without reading
-        // ahead (one copy of the walk fewer).
-        match (slabs.parallel.iter().any(|&p| p), self.read_ahead) {
-            (true, _) => self.walk_with::<Q, true, false>(r, &slabs, q, stack, stats),
-            (false, false) => self.walk_with::<Q, false, false>(r, &slabs, q, stack, stats),
-            (false, true) => self.walk_with::<Q, false, true>(r, &slabs, q, stack, stats),
-        }
-    }
-
-    /// Every entry popped costs one from a budget of what a valid tree
-    /// can hold, so corrupt indices end in a fault, never a hang. `READ_AHEAD`:
-    /// the entries pushed are read ahead ([`read_entry_ahead`]).
-    #[inline(always)]
-    fn walk_with<Q: Query, const PARALLEL: bool, const READ_AHEAD: bool>(
-        &self,
-        r: &PreparedRay,
-        slabs: &Slabs,
-        q: &mut Q,
-        stack: &mut [WideStackItem],
-        stats: &mut TraceStats,
-    ) {
-        let Some(first) = stack.first_mut() else {
-            stats.faults += 1;
-            return;
-        };
-        *first = WideStackItem {
-            child: 0,
-            count: 0,
-            t: r.t_min,
-        };
-        let mut sp = 1;
-        let mut budget = self.nodes.len().saturating_mul(WIDTH + 1);
-        let (mut interior, mut leaves, mut boxes, mut faults) = (0u64, 0u64, 0u64, 0u64);
-        // The nearest entry a node pushed is visited next without going
-        // through the stack (and a lone one is never written to it).
-        let mut next: Option<WideStackItem> = None;
-        let mut touch = 0u32;
-        let others = !(self.scene.spheres.is_empty() && self.scene.cones.is_empty());
-        loop {
-            let it = match next.take() {
-                Some(it) => it,
-                None => {
-                    if sp == 0 {
-                        break;
-                    }
-                    sp -= 1;
-                    let it = stack[sp];
-                    if it.t > q.limit() {
-                        continue;
-                    }
-                    it
-                }
-            };
-            if budget == 0 {
-                faults += 1;
-                break;
-            }
-            budget -= 1;
-            if it.child & LEAF_BIT != 0 {
-                leaves += 1;
-                let run = ((it.child & !LEAF_BIT) as usize, it.count as usize);
-                match q.visit(self, r, run, others) {
-                    Some(false) => continue,
-                    Some(true) => break,
-                    None => {
-                        faults += 1;
-                        break;
+            if PARALLEL && self.parallel[a] {
+                let (lo, hi) = (&n.planes[LOWER + a], &n.planes[UPPER + a]);
+                for i in 0..WIDTH {
+                    if !(o >= lo[i] && o <= hi[i]) {
+                        tn[i] = f32::INFINITY;
+                        tf[i] = f32::NEG_INFINITY;
                     }
                 }
-            }
-            let Some(n) = self.nodes.get(it.child as usize) else {
-                faults += 1;
-                break;
-            };
-            interior += 1;
-            let (tn, tf) = slabs.test::<PARALLEL>(n, r.t_min, q.limit());
-            let (mut hit, mut used) = (0u32, 0u32);
-            for i in 0..WIDTH {
-                hit |= ((tn[i] <= tf[i]) as u32) << i;
-                used |= ((n.child[i] != EMPTY_SLOT) as u32) << i;
-            }
-            hit &= used;
-            boxes += used.count_ones() as u64;
-            let item = |i: usize| WideStackItem {
-                child: n.child[i],
-                count: n.count[i],
-                t: tn[i],
-            };
-            if hit == 0 {
                 continue;
             }
-            if hit & (hit - 1) == 0 {
-                next = Some(item(hit.trailing_zeros() as usize));
-                continue;
+            let (near, far) = (&n.planes[self.near[a]], &n.planes[self.far[a]]);
+            for i in 0..WIDTH {
+                tn[i] = fmax((near[i] - o) * inv, tn[i]);
+                tf[i] = fmin((far[i] - o) * inv, tf[i]);
             }
-            if sp + WIDTH > stack.len() {
-                faults += 1;
-                break;
-            }
-            let base = sp;
-            while hit != 0 {
-                let i = hit.trailing_zeros() as usize;
-                hit &= hit - 1;
-                if READ_AHEAD {
-                    read_entry_ahead(self, n.child[i], &mut touch);
-                }
-                if Q::SORTED {
-                    push_nearest_last(stack, base, &mut sp, item(i));
-                } else {
-                    stack[sp] = item(i);
-                    sp += 1;
-                }
-            }
-            sp -= 1;
-            next = Some(stack[sp]);
         }
-        core::hint::black_box(touch);
-        stats.traversal_steps += interior + leaves;
-        stats.interior_steps += interior;
-        stats.leaf_steps += leaves;
-        stats.box_tests += boxes;
-        stats.faults += (faults > 0) as u64;
+        let mut hit = 0u32;
+        for i in 0..WIDTH {
+            hit |= ((tn[i] <= fmin(tf[i] * FAR_SLACK, t1)) as u32) << i;
+        }
+        (hit, tn)
     }
 }
 
@@ -366,60 +293,249 @@ fn fmax(a: f32, b: f32) -> f32 {
     }
 }
 
-/// Bytes of nodes and corner blocks above which a hierarchy's walks read
-/// ahead by default ([`WideBvh::with_read_ahead`]).
+impl WideBvh<'_> {
+    /// Closest hit of `ray`, on the caller's `stack` of at least
+    /// [`WideBvh::stack_len`] entries (a shorter one stops the walk with
+    /// a fault counted in `stats`).
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, stack: &mut [WideStackItem], stats: &mut TraceStats) -> Hit {
+        self.closest(ray, stack, stats)
+    }
+
+    /// Whether anything lies on `ray`'s segment; the stack as for
+    /// [`WideBvh::intersect`].
+    #[inline]
+    pub fn occluded(&self, ray: &Ray, stack: &mut [WideStackItem], stats: &mut TraceStats) -> bool {
+        self.any(ray, stack, stats)
+    }
+
+    #[inline(always)]
+    fn closest(&self, ray: &Ray, stack: &mut [WideStackItem], stats: &mut TraceStats) -> Hit {
+        stats.rays += 1;
+        if !ray.is_valid() {
+            return Hit::MISS;
+        }
+        let r = PreparedRay::new(ray);
+        let mut q = Closest {
+            best: Hit::MISS,
+            from_block: None,
+            limit: r.t_max,
+            tests: 0,
+        };
+        self.walk(&r, &mut q, stack, stats);
+        stats.prim_tests += q.tests;
+        q.finish(self)
+    }
+
+    #[inline(always)]
+    fn any(&self, ray: &Ray, stack: &mut [WideStackItem], stats: &mut TraceStats) -> bool {
+        stats.rays += 1;
+        if !ray.is_valid() {
+            return false;
+        }
+        let r = PreparedRay::new(ray);
+        let mut q = Any {
+            t_max: r.t_max,
+            tests: 0,
+        };
+        let hit = self.walk(&r, &mut q, stack, stats);
+        stats.prim_tests += q.tests;
+        hit
+    }
+
+    /// The box test, the leaf test and the read-ahead chosen once for the
+    /// ray, then the walk; true when a leaf stopped it.
+    #[inline(always)]
+    fn walk<Q: Query>(
+        &self,
+        r: &PreparedRay,
+        q: &mut Q,
+        stack: &mut [WideStackItem],
+        stats: &mut TraceStats,
+    ) -> bool {
+        let slabs = Slabs::new(r);
+        let others = !(self.scene.spheres.is_empty() && self.scene.cones.is_empty());
+        // Rays with a parallel axis are rare, and so are scenes of
+        // spheres and cones among meshes: those walks do not read ahead
+        // (fewer copies of the walk).
+        match (slabs.parallel.iter().any(|&p| p), others, self.read_ahead) {
+            (true, _, _) => self.walk_with::<Q, true, true, false>(r, &slabs, q, stack, stats),
+            (false, true, _) => self.walk_with::<Q, false, true, false>(r, &slabs, q, stack, stats),
+            (false, false, false) => {
+                self.walk_with::<Q, false, false, false>(r, &slabs, q, stack, stats)
+            }
+            (false, false, true) => {
+                self.walk_with::<Q, false, false, true>(r, &slabs, q, stack, stats)
+            }
+        }
+    }
+
+    /// Every entry popped costs one from a budget of what a valid tree can
+    /// hold, so corrupt indices end in a fault, never a hang. `OTHERS`:
+    /// leaves may hold spheres and cones. `READ_AHEAD`: the entries
+    /// pushed are read ahead ([`read_entry_ahead`]). True when a leaf
+    /// stopped the walk.
+    #[inline(always)]
+    fn walk_with<Q: Query, const PARALLEL: bool, const OTHERS: bool, const READ_AHEAD: bool>(
+        &self,
+        r: &PreparedRay,
+        slabs: &Slabs,
+        q: &mut Q,
+        stack: &mut [WideStackItem],
+        stats: &mut TraceStats,
+    ) -> bool {
+        if stack.is_empty() {
+            stats.faults += 1;
+            return false;
+        }
+        let mut sp = 0usize;
+        let mut budget = self.nodes.len().saturating_mul(WIDTH + 1);
+        let (mut interior, mut leaves, mut boxes, mut faults) = (0u64, 0u64, 0u64, 0u64);
+        let mut stopped = false;
+        let mut touch = 0u32;
+        // The entry walked now: the nearest one a node sent the ray on
+        // to, or the top of the stack.
+        let mut it = WideStackItem {
+            child: 0,
+            t: r.t_min,
+        };
+        'walk: loop {
+            if budget == 0 {
+                faults += 1;
+                break;
+            }
+            budget -= 1;
+            if it.child & LEAF_BIT != 0 {
+                leaves += 1;
+                let (first, count) = leaf_run(it.child);
+                match q.visit::<OTHERS>(self, r, first, count) {
+                    Some(false) => {}
+                    Some(true) => {
+                        stopped = true;
+                        break;
+                    }
+                    None => {
+                        faults += 1;
+                        break;
+                    }
+                }
+            } else {
+                let Some(n) = self.nodes.get(it.child as usize) else {
+                    faults += 1;
+                    break;
+                };
+                interior += 1;
+                let (mut hit, tn) = slabs.test::<PARALLEL>(n, r.t_min, q.limit());
+                let mut used = 0u32;
+                for i in 0..WIDTH {
+                    used |= ((n.child[i] != EMPTY_SLOT) as u32) << i;
+                }
+                boxes += used.count_ones() as u64;
+                hit &= used;
+                let item = |i: usize| WideStackItem {
+                    child: n.child[i],
+                    t: tn[i],
+                };
+                if hit != 0 {
+                    let first = hit.trailing_zeros() as usize;
+                    hit &= hit - 1;
+                    if hit == 0 {
+                        // One entry entered: walk it next.
+                        it = item(first);
+                        continue;
+                    }
+                    if sp + WIDTH > stack.len() {
+                        faults += 1;
+                        break;
+                    }
+                    // Every entry entered onto the stack (closest hit:
+                    // sorted far to near), then the nearest taken back.
+                    let base = sp;
+                    for i in core::iter::once(first).chain(bits(hit)) {
+                        if READ_AHEAD {
+                            read_entry_ahead(self, n.child[i], &mut touch);
+                        }
+                        let e = item(i);
+                        let mut k = sp;
+                        if Q::SORTED {
+                            while k > base && stack[k - 1].t < e.t {
+                                stack[k] = stack[k - 1];
+                                k -= 1;
+                            }
+                        }
+                        stack[k] = e;
+                        sp += 1;
+                    }
+                    sp -= 1;
+                    it = stack[sp];
+                    continue;
+                }
+            }
+            // Back to the nearest entry waiting that still lies within
+            // reach.
+            while sp > 0 {
+                sp -= 1;
+                if stack[sp].t <= q.limit() {
+                    it = stack[sp];
+                    continue 'walk;
+                }
+            }
+            break;
+        }
+        core::hint::black_box(touch);
+        stats.traversal_steps += interior + leaves;
+        stats.interior_steps += interior;
+        stats.leaf_steps += leaves;
+        stats.box_tests += boxes;
+        stats.faults += (faults > 0) as u64;
+        stopped
+    }
+}
+
+/// Bytes of nodes and blocks above which a hierarchy's walks read ahead by
+/// default ([`WideBvh::with_read_ahead`]).
 ///
 /// On x86-64 (with SSE: all but the soft-float targets) a read-ahead is a
 /// prefetch instruction, which costs a small hierarchy nothing measured,
-/// and every hierarchy reads ahead. Against
-/// loads above 2 MiB (below), incoherent rays, wide over `rtcIntersect1`
-/// (`coray bench --table speed --res 256`, the two builds alternated,
-/// two rounds): `random` (6.4 MiB) 0.60 / 0.57 -> 1.08 / 0.69, through
-/// the wide tracer 0.63 / 0.62 -> 0.70 / 0.69; `spd:gears` (2.1 MiB)
-/// 0.81 / 0.78 -> 0.84 / 0.83; the other SPD scenes, which read nothing
-/// ahead before, within the noise on every ray set.
+/// and every hierarchy reads ahead.
 #[cfg(all(target_arch = "x86_64", target_feature = "sse"))]
 pub const READ_AHEAD_BYTES: usize = 0;
 
-/// Bytes of nodes and corner blocks above which a hierarchy's walks read
-/// ahead by default ([`WideBvh::with_read_ahead`]).
+/// Bytes of nodes and blocks above which a hierarchy's walks read ahead by
+/// default ([`WideBvh::with_read_ahead`]).
 ///
 /// Elsewhere a read-ahead is a load (below), which pays beyond a typical
-/// per-core L2 cache (2 MiB on the machine the figures come from) and not
-/// within it: reading ahead over not, incoherent rays, one process
-/// alternating the two (x86-64, when it read ahead by loads too): `random`
-/// (6.4 MiB) 1.04-1.19x, `spd:gears` (2.1 MiB) 1.02-1.18x, `spd:teapot`
-/// (0.5 MiB) 0.95x, `spd:balls` (0.4 MiB) 0.92x.
+/// per-core L2 cache (2 MiB) and not within it.
 #[cfg(not(all(target_arch = "x86_64", target_feature = "sse")))]
 pub const READ_AHEAD_BYTES: usize = 2 << 20;
 
-/// Whether walks over `nodes` and `corners` read ahead by default: they
+/// Whether walks over `nodes` and `blocks` read ahead by default: they
 /// span more than [`READ_AHEAD_BYTES`].
-pub(crate) fn reads_ahead(nodes: &[WideNode], corners: &[Corners4]) -> bool {
-    size_of_val(nodes) + size_of_val(corners) > READ_AHEAD_BYTES
+pub(crate) fn reads_ahead(nodes: &[WideNode], blocks: &[LeafBlock]) -> bool {
+    size_of_val(nodes) + size_of_val(blocks) > READ_AHEAD_BYTES
 }
 
 /// Starts loading every cache line of what an entry names (an interior
-/// child's node, a leaf's first corner block) when the entry goes to the
-/// stack, so that its lines are on their way while the nearest entry is
-/// walked. A hint: what it reads changes no answer, and an index past its
-/// slice reads nothing. Three words a record, whose lines are all of a
-/// 16-aligned node's (128 bytes) or block's (144) wherever it starts: a
-/// node spans two or three lines, a block always three.
+/// child's node, a leaf's first block) when the entry goes to the stack,
+/// so that its lines are on their way while the nearest entry is walked.
+/// A hint: what it reads changes no answer, and an index past its slice
+/// reads nothing. A 16-aligned node (224 bytes) spans four or five lines,
+/// a block (160 bytes) three or four: one word at bytes 0, 64, 128 and
+/// the last of each.
 #[inline(always)]
 fn read_entry_ahead(w: &WideBvh, child: u32, touch: &mut u32) {
     if child & LEAF_BIT == 0 {
         if let Some(n) = w.nodes.get(child as usize) {
-            // Bytes 0, 64 and 124 of the node's 128.
-            line_ahead(n.min[0][0].to_bits(), &n.min[0][0], touch);
-            line_ahead(n.max[1][0].to_bits(), &n.max[1][0], touch);
-            line_ahead(n.count[WIDTH - 1], &n.count[WIDTH - 1], touch);
+            for row in [0, 2, 4] {
+                line_ahead(n.planes[row][0].to_bits(), &n.planes[row][0], touch);
+            }
+            line_ahead(n.child[WIDTH - 1], &n.child[WIDTH - 1], touch);
         }
-    } else if let Some(b) = w.corners.get((child & !LEAF_BIT) as usize / TRI_LANES) {
-        // Bytes 0, 64 and 140 of the block's 144.
-        line_ahead(b[0][0][0].to_bits(), &b[0][0][0], touch);
-        line_ahead(b[1][1][0].to_bits(), &b[1][1][0], touch);
-        line_ahead(b[2][2][3].to_bits(), &b[2][2][3], touch);
+    } else if let Some(b) = w.blocks.get(leaf_run(child).0) {
+        line_ahead(b.corners[0][0][0].to_bits(), &b.corners[0][0][0], touch);
+        line_ahead(b.corners[1][1][0].to_bits(), &b.corners[1][1][0], touch);
+        line_ahead(b.corners[2][2][0].to_bits(), &b.corners[2][2][0], touch);
+        line_ahead(b.prims[BLOCK_SLOTS - 1], &b.prims[BLOCK_SLOTS - 1], touch);
     }
 }
 

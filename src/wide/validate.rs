@@ -1,9 +1,12 @@
 //! Structural checks of a wide hierarchy, as for the other structures: run
 //! after every build in the tests, and by callers on memory they load. One
 //! pass over the nodes in index order: the breadth-first numbering the
-//! build makes is what proves the nodes a tree, so no stack is needed.
+//! build makes is what proves the nodes a tree, and the blocks following
+//! the leaves in the same order is what proves each block one leaf's, so
+//! no stack is needed.
 
-use super::node::{EMPTY_SLOT, LEAF_BIT};
+use super::block::{self, LeafBlock, BLOCK_SLOTS, NO_PRIM};
+use super::node::{leaf_run, EMPTY_SLOT, LEAF_BIT};
 use super::WideBvh;
 use crate::accel::Shape;
 use crate::{Aabb, Error};
@@ -17,29 +20,29 @@ impl WideBvh<'_> {
     /// 1, 2, 3, ... in slot order up to the node count (so every node but
     /// the root has one parent, numbered below it: a tree, walked in
     /// breadth-first levels of the recorded depth), that used slots come
-    /// first, every slot's box is exactly the union of what it holds (its
-    /// child's slots, or its references' primitive boxes), references lie
-    /// in range and name non-degenerate primitives, the leaves hold
-    /// `ref_count` references with the recorded digest and leaf count, the
-    /// corner blocks hold the scene's triangles of the slots they cover,
-    /// and every run with a triangle lies within them.
+    /// first, that the leaf entries take blocks 0, 1, 2, ... in the same
+    /// order, each block of a leaf but its last full and the last holding
+    /// its primitives first, that every slot's box is exactly the union of
+    /// what it holds (its child's slots, or its primitives' boxes), that
+    /// primitives lie in range and are not degenerate, that the leaves hold
+    /// `ref_count` primitives with the recorded digest, leaf and block
+    /// counts, and that every block holds the scene's corners of its
+    /// triangles (NaN elsewhere).
     ///
     /// Never panics, in time linear in the hierarchy. Once it accepts a
     /// hierarchy, every traversal of it gives the hits of a clean build
-    /// with the same references.
+    /// with the same leaves.
     pub fn validate(&self) -> Result<Shape, Error> {
         let info = &self.info;
         let count = info.node_count as usize;
-        if count == 0 || count > self.nodes.len() || info.ref_count as usize > self.refs.len() {
+        if count == 0 || count > self.nodes.len() || info.block_count as usize > self.blocks.len() {
             return Err(corrupt("counts"));
         }
         let mut shape = Shape {
             nodes: info.node_count,
             ..Shape::default()
         };
-        let (mut next, mut refs, mut digest) = (1usize, 0u64, 0u64);
-        // Reference slots the corner blocks cover.
-        let covered = self.corners.len() * crate::geom::TRI_LANES;
+        let (mut next, mut next_block, mut prims, mut digest) = (1usize, 0usize, 0u64, 0u64);
         let (mut depth, mut level_end) = (0u32, 1usize);
         for (k, n) in self.nodes[..count].iter().enumerate() {
             if k == level_end {
@@ -48,7 +51,7 @@ impl WideBvh<'_> {
             }
             let used = n.child.iter().take_while(|&&c| c != EMPTY_SLOT).count();
             if n.child[used..].iter().any(|&c| c != EMPTY_SLOT)
-                || n.count[used..].iter().any(|&c| c != 0)
+                || (used..super::WIDTH).any(|i| n.slot_bounds(i) != Aabb::EMPTY)
             {
                 return Err(corrupt("a used slot after an empty one"));
             }
@@ -56,40 +59,23 @@ impl WideBvh<'_> {
                 return Err(corrupt("node without entries"));
             }
             for i in 0..used {
-                let (c, m) = (n.child[i], n.count[i]);
+                let c = n.child[i];
                 let b = if c & LEAF_BIT != 0 {
-                    if m == 0 {
-                        return Err(corrupt("leaf without references"));
-                    }
                     shape.leaves += 1;
-                    refs += m as u64;
-                    let first = (c & !LEAF_BIT) as usize;
-                    let run = first
-                        .checked_add(m as usize)
-                        .filter(|&end| end <= info.ref_count as usize)
-                        .map(|end| &self.refs[first..end])
-                        .ok_or(corrupt("references out of range"))?;
-                    if first + m as usize > covered
-                        && run
-                            .iter()
-                            .any(|&p| (p as usize) < self.scene.triangles.len())
-                    {
-                        return Err(corrupt("a run with a triangle past the corner blocks"));
+                    let (first, m) = leaf_run(c);
+                    if first != next_block {
+                        return Err(corrupt("leaf blocks out of order"));
                     }
-                    let mut b = Aabb::EMPTY;
-                    for &p in run {
-                        digest = digest.wrapping_add(crate::rng::ref_mix(p));
-                        let pb = self
-                            .scene
-                            .prim_bounds(p as usize)
-                            .ok_or(corrupt("reference to a degenerate or missing primitive"))?;
-                        b = b.union(&pb);
-                    }
+                    let run = self
+                        .blocks
+                        .get(first..first + m)
+                        .filter(|_| first + m <= info.block_count as usize)
+                        .ok_or(corrupt("leaf blocks out of range"))?;
+                    next_block += m;
+                    let (b, held) = self.leaf_bounds(run, &mut digest)?;
+                    prims += held;
                     b
                 } else {
-                    if m != 0 {
-                        return Err(corrupt("interior entry with a reference count"));
-                    }
                     if c as usize != next || next >= count {
                         return Err(corrupt("children out of breadth-first order"));
                     }
@@ -104,8 +90,11 @@ impl WideBvh<'_> {
         if next != count {
             return Err(corrupt("nodes without a parent"));
         }
-        if refs != info.ref_count as u64 || shape.leaves != info.leaf_count {
-            return Err(corrupt("leaves hold a different number of references"));
+        if next_block != info.block_count as usize {
+            return Err(corrupt("blocks without a leaf"));
+        }
+        if prims != info.ref_count as u64 || shape.leaves != info.leaf_count {
+            return Err(corrupt("leaves hold a different number of primitives"));
         }
         if depth != info.depth {
             return Err(corrupt("depth differs from the recorded one"));
@@ -113,14 +102,39 @@ impl WideBvh<'_> {
         if digest != info.ref_digest() {
             return Err(corrupt("reference digest"));
         }
-        let refs = &self.refs[..info.ref_count as usize];
-        if self.corners.len() != info.corner_blocks as usize
-            || !super::corners::matches(&self.scene, refs, self.corners)
-        {
-            return Err(corrupt("corners differ from the scene's triangles"));
-        }
         shape.refs = info.ref_count;
         shape.depth = depth;
         Ok(shape)
+    }
+
+    /// The box of one leaf's blocks and how many primitives they hold,
+    /// each added to `digest`: every block but the last full, the last
+    /// holding its primitives first, each primitive in range and not
+    /// degenerate, the corners the scene's.
+    fn leaf_bounds(&self, run: &[LeafBlock], digest: &mut u64) -> Result<(Aabb, u64), Error> {
+        let (mut b, mut held) = (Aabb::EMPTY, 0u64);
+        for (j, blk) in run.iter().enumerate() {
+            let filled = blk.prims.iter().take_while(|&&p| p != NO_PRIM).count();
+            let last = j + 1 == run.len();
+            if filled == 0
+                || (!last && filled != BLOCK_SLOTS)
+                || blk.prims[filled..].iter().any(|&p| p != NO_PRIM)
+            {
+                return Err(corrupt("a leaf block's slots out of order"));
+            }
+            for &p in &blk.prims[..filled] {
+                *digest = digest.wrapping_add(crate::rng::ref_mix(p));
+                let pb = self
+                    .scene
+                    .prim_bounds(p as usize)
+                    .ok_or(corrupt("reference to a degenerate or missing primitive"))?;
+                b = b.union(&pb);
+            }
+            if !block::matches(&self.scene, blk) {
+                return Err(corrupt("corners differ from the scene's triangles"));
+            }
+            held += filled as u64;
+        }
+        Ok((b, held))
     }
 }

@@ -26,12 +26,13 @@ pub const INCOHERENT_RAYS: usize = 1_000_000;
 /// ray on a tracer per thread; one call per ray with the handle and
 /// stack), `wide-c1` is `wide` one call per ray on a tracer (the fastest
 /// one-ray C call on incoherent rays).
-pub const RAY_METHODS: [&str; 9] = [
+pub const RAY_METHODS: [&str; 10] = [
     "kd",
     "kd-rope",
     "kd-packet",
     "tdbs-sah",
     "wide",
+    "wide-packet",
     "kd-c",
     "kd-c1",
     "kd-c1-handle",
@@ -143,10 +144,17 @@ impl Visit for TimeSet<'_> {
 /// calls when the build has them: the rows every table sets beside
 /// Embree's.
 pub fn with_embree(names: &[&str]) -> Vec<Method> {
-    let mut methods: Vec<Method> = names
-        .iter()
-        .map(|m| Method::parse(m).expect("registered"))
-        .collect();
+    with_embree_methods(
+        names
+            .iter()
+            .map(|m| Method::parse(m).expect("registered"))
+            .collect(),
+    )
+}
+
+/// `methods`, then Embree's one-ray and packet calls when the build has
+/// them.
+pub fn with_embree_methods(mut methods: Vec<Method>) -> Vec<Method> {
     if cfg!(feature = "embree") {
         methods.push(Method::Embree(EmbreeCall::One));
         methods.push(Method::Embree(EmbreeCall::Eight));
@@ -154,26 +162,45 @@ pub fn with_embree(names: &[&str]) -> Vec<Method> {
     methods
 }
 
-/// Runs the speed table on one scene at each thread count.
+/// Runs the speed table on one scene at each thread count: `methods`
+/// (default [`RAY_METHODS`] and the casts) beside Embree's calls. The
+/// reference answers and the casts' trees are built whether or not their
+/// methods are listed; the casts run only by default.
 pub fn run(
     s: &SceneData,
     set: &Settings,
     thread_counts: &[usize],
+    methods: Option<&[Method]>,
 ) -> Result<Vec<SpeedRow>, String> {
-    let methods = with_embree(&RAY_METHODS);
+    let methods = match methods {
+        Some(m) => {
+            let mut m = m.to_vec();
+            m.retain(|m| !matches!(m, Method::Embree(_)));
+            with_embree_methods(m)
+        }
+        None => with_embree(&RAY_METHODS),
+    };
+    let casts: &[Scheme] = if methods.len() == RAY_METHODS.len() + 2 {
+        &CASTS
+    } else {
+        &[]
+    };
     let threads_max = thread_counts.iter().copied().max().unwrap_or(1);
     let built: Vec<Built> = methods
         .iter()
         .map(|&m| Built::new(m, &s.mesh, set.preset, threads_max))
         .collect::<Result<_, _>>()?;
-    let kd = built[0].kd().expect("kd first");
+    let reference_kd = Built::new(
+        Method::kd(Traversal::Hierarchical),
+        &s.mesh,
+        set.preset,
+        threads_max,
+    )?;
+    let kd = reference_kd.kd().expect("a kd method");
     let tree = kd.tree(s.mesh.scene()).map_err(|e| e.to_string())?;
     // The casts walk ropes: kd-rope's tree (the same nodes, with ropes).
-    let roped = built
-        .iter()
-        .find(|b| b.method == Method::kd_for_casts())
-        .and_then(|b| b.kd())
-        .expect("kd-rope is a ray method");
+    let roped = Built::new(Method::kd_for_casts(), &s.mesh, set.preset, threads_max)?;
+    let roped = roped.kd().expect("a kd method");
     let cast_tree = roped.tree(s.mesh.scene()).map_err(|e| e.to_string())?;
     let cam = &s.mesh.camera;
     // Primary rays in 4 x 2 pixel blocks, the order packets take them in.
@@ -204,10 +231,10 @@ pub fn run(
     let mut out = Vec::new();
     for &threads in thread_counts {
         // best[set][method] seconds; verdicts from the first run.
-        let n_cast = if threads == 1 { CASTS.len() } else { 0 };
+        let n_cast = if threads == 1 { casts.len() } else { 0 };
         let mut best = vec![vec![f64::INFINITY; built.len() + n_cast]; sets.len()];
         let mut judged: Vec<Vec<(usize, usize)>> = vec![Vec::new(); sets.len()];
-        let mut cast_room: Vec<OwnedCast> = CASTS[..n_cast]
+        let mut cast_room: Vec<OwnedCast> = casts[..n_cast]
             .iter()
             .map(|&sc| OwnedCast::new(&image_requirements(cam.width, cam.height, sc, 512)))
             .collect();
@@ -241,7 +268,7 @@ pub fn run(
                     }
                 }
                 if st.rays.set == RaySet::Primary {
-                    for (ci, &sc) in CASTS[..n_cast].iter().enumerate() {
+                    for (ci, &sc) in casts[..n_cast].iter().enumerate() {
                         let (secs, r) = timed(|| {
                             cast_image(&cast_tree, cam, sc, cast_room[ci].scratch(), &mut cast_hits)
                         });
@@ -258,7 +285,7 @@ pub fn run(
         for (si, st) in sets.iter().enumerate() {
             let n = st.rays.rays.len();
             let names = methods.iter().map(|m| m.to_string()).chain(
-                CASTS[..n_cast]
+                casts[..n_cast]
                     .iter()
                     .map(|&scheme| Method::Cast { scheme }.to_string()),
             );
