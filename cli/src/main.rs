@@ -51,7 +51,7 @@ const MAX_REPEAT: usize = 1000;
 enum Command {
     /// Whitted ray tracing to an image: primary, shadow, reflection and refraction rays.
     Render {
-        /// Scene: an NFF file, `spd:NAME[:SIZE]` or `random[:N]`.
+        /// Scene: an NFF file, a mesh (`.obj`, `.ply`), `spd:NAME[:SIZE]` or `random[:N]`.
         #[arg(default_value = "spd:balls")]
         scene: String,
         /// Output image; the format comes from the extension (.png or .ppm).
@@ -85,7 +85,7 @@ enum Command {
     },
     /// Methods side by side on the same rays in one run; a table with a legend, or JSON.
     Bench {
-        /// Scene: an NFF file, `spd:NAME[:SIZE]` or `random[:N]` (100,000 triangles, 10,000 spheres).
+        /// Scene: an NFF file, a mesh (`.obj`, `.ply`), `spd:NAME[:SIZE]` or `random[:N]` (100,000 triangles, 10,000 spheres).
         #[arg(default_value = "random")]
         scene: String,
         /// Resolution N (N x N primary rays).
@@ -124,7 +124,7 @@ enum Command {
     /// image; exit status 1 when any ray disagrees beyond a documented tie.
     /// Needs a build with `--features embree` (Debian's libembree-dev).
     Compare {
-        /// Scene: an NFF file, `spd:NAME[:SIZE]` or `random[:N]`.
+        /// Scene: an NFF file, a mesh (`.obj`, `.ply`), `spd:NAME[:SIZE]` or `random[:N]`.
         scene: String,
         /// Resolution N (N x N primary rays).
         #[arg(long, default_value_t = 1024)]
@@ -143,7 +143,7 @@ enum Command {
     /// program to map and trace (examples/trace_saved.c; format in
     /// ffi/src/saved.rs).
     Build {
-        /// Scene: an NFF file, `spd:NAME[:SIZE]` or `random[:N]`.
+        /// Scene: an NFF file, a mesh (`.obj`, `.ply`), `spd:NAME[:SIZE]` or `random[:N]`.
         scene: String,
         /// The file to write.
         #[arg(short, long, default_value = "scene.coray")]
@@ -160,7 +160,7 @@ enum Command {
     },
     /// Objects by type and, per structure, its size and shape.
     Stats {
-        /// Scene: an NFF file, `spd:NAME[:SIZE]` or `random[:N]`.
+        /// Scene: an NFF file, a mesh (`.obj`, `.ply`), `spd:NAME[:SIZE]` or `random[:N]`.
         scene: String,
         /// Print one JSON object.
         #[arg(long)]
@@ -169,7 +169,7 @@ enum Command {
     /// Writes a scene as C arrays in CorayScene's layout (for firmware
     /// without a file system; embedded/ is built with one).
     Export {
-        /// Scene: an NFF file, `spd:NAME[:SIZE]` or `random[:N]`.
+        /// Scene: an NFF file, a mesh (`.obj`, `.ply`), `spd:NAME[:SIZE]` or `random[:N]`.
         scene: String,
         /// The C header to write.
         #[arg(short, long, default_value = "scene.h")]
@@ -250,7 +250,7 @@ fn render_spd(
 /// text and the error list both come from here.
 const TABLES: [(&str, &str); 8] = [
     ("build", "build ms and bytes per primitive of kd-auto, kd-paper, tdbs-sah, wide and Embree (1 thread and --threads N), builders interleaved, and the primary rays at --res through kd-auto's tree and Embree's; SCENE as for speed"),
-    ("speed", "every method's Mrays/s per ray set against Embree's one-ray and packet calls; SCENE a list, `spd:all` or default the eight SPD scenes and random; at 1 thread and at --threads N; --methods picks the coray methods (the casts run only by default)"),
+    ("speed", "every method's Mrays/s per ray set against Embree's one-ray and packet calls; SCENE a list, `spd:all`, `meshes` (the bunny and spot from $CORAY_MESHES, default ../shared/meshes, spd:mount:9, spd:tetra:9, random:1000000) or default all of those, the eight SPD scenes and random; at 1 thread and at --threads N; --methods picks the coray methods (the casts run only by default)"),
     ("lcts", "Havran and Bittner's Table 2: SCENE may be a comma-separated list, or `spd:all`"),
     ("lcts-res", "their Table 3: SCENE (default spd:teapot) at 256 to --max-res pixels square"),
     ("bvh", "the thesis' hierarchy metrics per builder on SCENE (6.3.1)"),
@@ -314,17 +314,46 @@ fn parse_res(s: &str) -> Result<(u64, u64), String> {
 }
 
 /// The scenes of `--table speed|build`: the default (`random`) is the
-/// eight SPD scenes and random, `spd:all` the eight SPD scenes, else a
-/// comma-separated list.
+/// eight SPD scenes, random and the mesh rows ([`mesh_rows`]), `spd:all`
+/// the eight SPD scenes, `meshes` the mesh rows, else a comma-separated
+/// list.
 fn table_scenes(scene: &str) -> Vec<String> {
+    let spd = lcts_table::SPD_SCENES.iter().map(|n| format!("spd:{n}"));
     match scene {
-        "random" | "spd:all" => lcts_table::SPD_SCENES
-            .iter()
-            .map(|n| format!("spd:{n}"))
-            .chain((scene == "random").then(|| "random".to_string()))
+        "random" => spd
+            .chain(["random".to_string()])
+            .chain(mesh_rows())
             .collect(),
+        "spd:all" => spd.collect(),
+        "meshes" => mesh_rows(),
         _ => scene.split(',').map(str::to_string).collect(),
     }
+}
+
+/// Where the mesh rows' files are: `$CORAY_MESHES`, else `../shared/meshes`
+/// (beside the repository, as its CI has them).
+fn mesh_dir() -> PathBuf {
+    std::env::var_os("CORAY_MESHES")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from("../shared/meshes"))
+}
+
+/// The tables' rows of real meshes and large scenes: the scanned and the
+/// modelled mesh of [`mesh_dir`] (those present), SPD mount and tetra at
+/// size 9 (about 524k and 262k triangles), a million random triangles.
+fn mesh_rows() -> Vec<String> {
+    let dir = mesh_dir();
+    ["stanford-bunny.obj", "spot.obj"]
+        .iter()
+        .map(|f| dir.join(f))
+        .filter(|p| p.is_file())
+        .map(|p| p.display().to_string())
+        .chain(
+            ["spd:mount:9", "spd:tetra:9", "random:1000000"]
+                .iter()
+                .map(|s| s.to_string()),
+        )
+        .collect()
 }
 
 /// A scene with its camera set to `res` x `res` pixels, its memory for

@@ -1,5 +1,6 @@
-//! Scenes the command works on: `random[:N]`, `spd:NAME[:SIZE]` or an NFF
-//! file, checked against the limits before anything large is allocated.
+//! Scenes the command works on: `random[:N]`, `spd:NAME[:SIZE]`, an NFF
+//! file or a mesh (OBJ, PLY), checked against the limits before anything
+//! large is allocated.
 
 use crate::budget;
 use coray_scenes::spd::{self, Options};
@@ -31,8 +32,9 @@ impl SceneData {
 /// spheres that come with them.
 pub const MAX_RANDOM: usize = coray::limits::MAX_PRIMS / 11 * 10;
 
-/// Reads a scene name: `random[:N]`, `spd:NAME[:SIZE]` or a path to an NFF
-/// file. Its camera is checked; its memory (mesh and one kd-tree) too.
+/// Reads a scene name: `random[:N]`, `spd:NAME[:SIZE]`, or a path to an NFF
+/// file or to a mesh (`.obj`, `.ply`: a camera framed from its box and one
+/// light). Its camera is checked; its memory (mesh and one kd-tree) too.
 pub fn load(spec: &str, opts: &Options) -> Result<SceneData, String> {
     let mesh = if let Some(rest) = spec.strip_prefix("spd:") {
         let (name, size) = match rest.split_once(':') {
@@ -60,6 +62,8 @@ pub fn load(spec: &str, opts: &Options) -> Result<SceneData, String> {
         let tree = budget::kd_bytes(&coray::kd::requirements(n + n / 10, &params));
         budget::check_memory(&format!("random:{n}"), n as f64 * per + tree)?;
         coray_scenes::random::random(n)
+    } else if coray_scenes::mesh_file::MeshFormat::of(std::path::Path::new(spec)).is_some() {
+        coray_scenes::mesh_file::read_mesh(std::path::Path::new(spec))?
     } else {
         let text = std::fs::read_to_string(spec).map_err(|e| format!("{spec}: {e}"))?;
         let nff = NffScene::parse(&text).map_err(|e| format!("{spec}:{e}"))?;

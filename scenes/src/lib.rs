@@ -1,7 +1,9 @@
 //! Scenes for coray: Eric Haines' Neutral File Format (NFF) read and
-//! written, and triangulated into the arrays a [`coray::Scene`] borrows.
+//! written, triangle meshes read from OBJ and PLY files, and both turned
+//! into the arrays a [`coray::Scene`] borrows.
 
 pub mod mesh;
+pub mod mesh_file;
 pub mod nff;
 pub mod random;
 pub mod spd;

@@ -63,6 +63,33 @@ pub struct SceneMesh {
     pub counts: Counts,
 }
 
+/// The view of a scene that has none: from the front and a little above
+/// the centre of `bounds`, far enough that the whole box is in a 45-degree
+/// field of view, 512 x 512 pixels.
+pub fn framing_view(bounds: &coray::Aabb) -> View {
+    let c = if bounds.is_empty() {
+        Vec3::ZERO
+    } else {
+        (bounds.min + bounds.max) * 0.5
+    };
+    let r = if bounds.is_empty() {
+        1.0
+    } else {
+        // Far enough from the centre to be a distinct f32 point.
+        (bounds.max - bounds.min)
+            .length()
+            .max(1e-5 * (1.0 + c.abs().max_element()))
+    };
+    View {
+        from: (c + Vec3::new(0.0, 0.3, 1.0).normalize() * (1.5 * r)).into(),
+        at: c.into(),
+        up: [0.0, 1.0, 0.0],
+        angle: 45.0,
+        hither: 0.0,
+        resolution: [512, 512],
+    }
+}
+
 /// The material used before the first `f`.
 pub const DEFAULT_MATERIAL: Material = Material {
     color: [0.8, 0.8, 0.8],
@@ -155,30 +182,9 @@ impl SceneMesh {
             })
             .collect();
         m.background = Vec3::from(nff.background.unwrap_or([0.0; 3]));
-        let bounds = m.scene().bounds();
-        let view = nff.view.unwrap_or_else(|| {
-            let c = if bounds.is_empty() {
-                Vec3::ZERO
-            } else {
-                (bounds.min + bounds.max) * 0.5
-            };
-            let r = if bounds.is_empty() {
-                1.0
-            } else {
-                // Far enough from the centre to be a distinct f32 point.
-                (bounds.max - bounds.min)
-                    .length()
-                    .max(1e-5 * (1.0 + c.abs().max_element()))
-            };
-            View {
-                from: (c + Vec3::new(0.0, 0.3, 1.0).normalize() * (1.5 * r)).into(),
-                at: c.into(),
-                up: [0.0, 1.0, 0.0],
-                angle: 45.0,
-                hither: 0.0,
-                resolution: [512, 512],
-            }
-        });
+        let view = nff
+            .view
+            .unwrap_or_else(|| framing_view(&m.scene().bounds()));
         m.camera = view.camera();
         m.hither = view.hither;
         m
