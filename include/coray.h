@@ -14,7 +14,7 @@
 #define CORAY_VERSION_MAJOR 1
 
 // Minor version: new functions or struct fields, compatible.
-#define CORAY_VERSION_MINOR 6
+#define CORAY_VERSION_MINOR 7
 
 // Patch version: fixes only.
 #define CORAY_VERSION_PATCH 0
@@ -547,10 +547,9 @@ typedef uint32_t CorayProjScheme;
 typedef struct CorayWideParams {
   // `sizeof(CorayWideParams)`.
   size_t struct_size;
-  // Most primitives per leaf entry (at least 1; default 4, the fastest
-  // measured on incoherent rays); below it the surface area heuristic
-  // (a triangle priced at half a sphere's or a cone's test: a leaf
-  // tests four triangles at once) decides whether a node splits.
+  // Most primitives per leaf entry (1 to 64; default 8: a leaf's
+  // triangles are tested eight at a time); below it the surface area
+  // heuristic decides whether a node splits.
   uint32_t leaf_size;
 } CorayWideParams;
 
@@ -1401,7 +1400,7 @@ enum CorayStatus coray_proj_tracer_occluded1(struct CorayTracer *tracer,
 enum CorayStatus coray_tracer_stats(const struct CorayTracer *tracer,
                                     struct CorayTraceStats *stats);
 
-// Default parameters (leaves of up to 4) with `struct_size` set.
+// Default parameters (leaves of up to 8) with `struct_size` set.
 struct CorayWideParams coray_wide_params_default(void);
 
 // A `CorayWideInfo` to fill, `struct_size` set.

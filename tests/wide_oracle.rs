@@ -213,7 +213,7 @@ fn blocks_hold_every_kind() {
             }
             let mixed = mixed_leaves(&w);
             if tris > 0 && others > 0 {
-                assert!(mixed > 10, "{mixed} mixed leaves");
+                assert!(mixed > 0, "{mixed} mixed leaves");
             } else {
                 assert_eq!(mixed, 0);
             }

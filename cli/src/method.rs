@@ -59,9 +59,8 @@ impl Preset {
 }
 
 /// Most primitives a leaf entry of the `wide` method holds (the surface
-/// area heuristic decides below it): measured fastest on incoherent and
-/// diffuse rays (bench's speed table, SPD scenes), as the C default.
-pub const WIDE_LEAF_SIZE: u32 = 4;
+/// area heuristic decides below it): the library's default.
+pub const WIDE_LEAF_SIZE: u32 = coray::wide::DEFAULT_LEAF_SIZE;
 
 /// The hierarchy builders by name.
 pub const BVH_NAMES: [(&str, BvhBuild); 7] = [

@@ -28,10 +28,9 @@ use core::mem::size_of;
 pub struct CorayWideParams {
     /// `sizeof(CorayWideParams)`.
     pub struct_size: usize,
-    /// Most primitives per leaf entry (at least 1; default 4, the fastest
-    /// measured on incoherent rays); below it the surface area heuristic
-    /// (a triangle priced at half a sphere's or a cone's test: a leaf
-    /// tests four triangles at once) decides whether a node splits.
+    /// Most primitives per leaf entry (1 to 64; default 8: a leaf's
+    /// triangles are tested eight at a time); below it the surface area
+    /// heuristic decides whether a node splits.
     pub leaf_size: u32,
 }
 
@@ -70,12 +69,12 @@ unsafe impl Versioned for CorayWideInfo {
     const SIZE_1_0: usize = size_of::<Self>();
 }
 
-/// Default parameters (leaves of up to 4) with `struct_size` set.
+/// Default parameters (leaves of up to 8) with `struct_size` set.
 #[no_mangle]
 pub extern "C" fn coray_wide_params_default() -> CorayWideParams {
     CorayWideParams {
         struct_size: size_of::<CorayWideParams>(),
-        leaf_size: 4,
+        leaf_size: wide::DEFAULT_LEAF_SIZE,
     }
 }
 
@@ -91,7 +90,7 @@ pub extern "C" fn coray_wide_info_default() -> CorayWideInfo {
 impl CorayWideParams {
     /// The checked leaf size.
     fn leaf_size(&self) -> Result<u32, CorayStatus> {
-        if self.leaf_size == 0 {
+        if !(1..=wide::MAX_LEAF_SIZE).contains(&self.leaf_size) {
             return Err(CorayStatus::InvalidParameter);
         }
         Ok(self.leaf_size)

@@ -106,6 +106,10 @@ pub(crate) enum LeafRule {
         /// (1: all alike): the SAH counts each primitive at its kind's
         /// cost, so splits and leaves weigh what testing them costs.
         triangle: f64,
+        /// Triangles a leaf tests at once (1: one at a time): the leaf
+        /// rule prices a leaf's triangles, and those of the two leaves
+        /// its best split would make, rounded up to whole passes.
+        block: usize,
     },
 }
 
@@ -237,11 +241,29 @@ pub(crate) fn build<'a>(
             );
         }
         let (c, axis, k) = best.expect("count >= 2");
-        if let (true, LeafRule::Sah { traversal, .. }) = (small, rule) {
+        if let (
+            true,
+            LeafRule::Sah {
+                traversal,
+                triangle,
+                block,
+            },
+        ) = (small, rule)
+        {
             // The sweep's criterion is A_L n_L + A_R n_R: the split's
             // tests in units of the node's area times one test (n: the
             // sides' weights, when primitives weigh by kind).
             let a = half_area(&bounds);
+            let (c, tests) = if block > 1 {
+                passes(
+                    &order[axis][first..first + count],
+                    k,
+                    boxes,
+                    (scene.triangles.len(), triangle, block),
+                )
+            } else {
+                (c, tests)
+            };
             if c + traversal * a >= a * tests {
                 nodes[i] = BvhNode::leaf(&bounds, first as u32, count as u32);
                 depth = depth.max(d);
@@ -269,6 +291,33 @@ pub(crate) fn build<'a>(
         i += 1;
     }
     Ok(binary(scene, nodes, refs, top, n, depth))
+}
+
+/// The leaf rule's prices when triangles are tested `block` at a time:
+/// the split of `run` (sorted on the split's axis) after its first `k`
+/// references as `A_L n_L + A_R n_R` and the run as a leaf's tests, each
+/// side's triangles (references below `triangles`, at weight `w`) rounded
+/// up to whole passes of `block`, its spheres and cones at 1.
+fn passes(
+    run: &[u32],
+    k: usize,
+    boxes: &[Aabb],
+    (triangles, w, block): (usize, f64, usize),
+) -> (f64, f64) {
+    let price = |side: &[u32]| {
+        let tri = side.iter().filter(|&&p| (p as usize) < triangles).count();
+        let rounded = tri.div_ceil(block) * block;
+        w * rounded as f64 + (side.len() - tri) as f64
+    };
+    let area = |side: &[u32]| {
+        half_area(
+            &side
+                .iter()
+                .fold(Aabb::EMPTY, |b, &p| b.union(&boxes[p as usize])),
+        )
+    };
+    let (l, r) = run.split_at(k);
+    (area(l) * price(l) + area(r) * price(r), price(run))
 }
 
 /// The criterion at every linear partition of `run` (sorted by centre on
@@ -833,7 +882,8 @@ mod tests {
             run(
                 LeafRule::Sah {
                     traversal: 1e30,
-                    triangle: 1.0
+                    triangle: 1.0,
+                    block: 1,
                 },
                 4
             )
@@ -842,6 +892,7 @@ mod tests {
             LeafRule::Sah {
                 traversal: 0.0,
                 triangle: 1.0,
+                block: 1,
             },
             4,
         );

@@ -51,15 +51,14 @@ pub enum Builder {
 /// The TDBS-SAH hierarchy whose nodes of `leaf_size` primitives or fewer
 /// become leaves only where the surface area heuristic prices a leaf at
 /// most as the best split (a traversal step costing `traversal` sphere
-/// tests, a triangle's test `triangle` of one; both the splits and the
-/// leaf rule price each primitive at its kind's cost): the binary
-/// hierarchy the wide one is collapsed from. Storage and scratch as
+/// tests, a triangle's test `triangle` of one, triangles tested `block`
+/// at a time; both the splits and the leaf rule price each primitive at
+/// its kind's cost): the binary hierarchy the wide one is collapsed from. Storage and scratch as
 /// [`build`] with [`Builder::TdbsSah`].
 pub(crate) fn build_sah_leaves<'a>(
     scene: &Scene<'a>,
     leaf_size: u32,
-    traversal: f64,
-    triangle: f64,
+    (traversal, triangle, block): (f64, f64, usize),
     storage: BvhStorage<'a>,
     scratch: BvhScratch,
 ) -> Result<Bvh<'a>, Error> {
@@ -71,6 +70,7 @@ pub(crate) fn build_sah_leaves<'a>(
         build_tdbs::LeafRule::Sah {
             traversal,
             triangle,
+            block,
         },
         storage,
         scratch,
