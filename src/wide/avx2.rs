@@ -66,10 +66,17 @@ struct Pass {
 /// triangles of blocks `a` and `b` (slots 0-3 and 4-7) within `t_max`,
 /// each lane the one-triangle test's operations in its order. Passes
 /// where every slot misses the triangle by its barycentric signs (most)
-/// skip the division.
+/// skip the division. Generic over its walk's parameters so that each
+/// walk has its own copy, which the compiler then inlines (a function
+/// compiled for AVX2 cannot be `inline(always)`).
 #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
 #[inline]
-fn triangles8(tl: &TriLanes, a: &LeafBlock, b: &LeafBlock, t_max: f32) -> Pass {
+fn triangles8<const ANY: bool, const OTHERS: bool, const PARALLEL: bool>(
+    tl: &TriLanes,
+    a: &LeafBlock,
+    b: &LeafBlock,
+    t_max: f32,
+) -> Pass {
     let [kx, ky, kz] = tl.k;
     // Corner `k` relative to the origin, sheared: x, y, and z (unscaled).
     let corner = |k: usize| {
@@ -175,11 +182,29 @@ fn other_slots(b: &LeafBlock, triangles: usize) -> u32 {
 }
 
 /// A closest-hit walk's answer so far.
-struct Best {
-    hit: Hit,
+pub(super) struct Best {
+    pub(super) hit: Hit,
     /// Block and slot of the best hit when a pass found it: its normal is
     /// made from the block's corners once, at the end.
-    from_block: Option<(usize, usize)>,
+    pub(super) from_block: Option<(usize, usize)>,
+}
+
+/// A valid ray's walk over a scene of triangles alone, from entry `start`
+/// of `w` (a packet's lane walking on alone): a closest hit into `best`,
+/// or (`ANY`) whether anything is hit. The ray's inverse direction is
+/// finite (a packet's is).
+#[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
+#[inline]
+pub(super) fn walk_from<const ANY: bool>(
+    w: &WideBvh,
+    ray: &Ray,
+    start: u32,
+    best: &mut Best,
+    stack: &mut [WideStackItem],
+    stats: &mut TraceStats,
+) -> bool {
+    let r = PreparedRay::for_triangles(ray);
+    walk::<ANY, false, false, true>(w, &r, start, best, stack, stats)
 }
 
 impl Best {
@@ -245,16 +270,19 @@ fn settle<const ANY: bool>(
     false
 }
 
-/// One ray's walk: a closest hit into `best` (or, `ANY`, whether anything
-/// is hit: the return value). Every entry taken costs one from a budget
-/// of what a valid tree can hold, so corrupt indices end in a fault,
-/// never a hang. `OTHERS`: leaves may hold spheres and cones. `PARALLEL`:
-/// some axis' inverse direction is infinite.
+/// One ray's walk from entry `start` (the root: 0): a closest hit into
+/// `best` (or, `ANY`, whether anything is hit: the return value). Every
+/// entry taken costs one from a budget of what a valid tree can hold, so
+/// corrupt indices end in a fault, never a hang. `OTHERS`: leaves may hold
+/// spheres and cones. `PARALLEL`: some axis' inverse direction is
+/// infinite. `LANE`: a packet's lane walking on alone (its own copy of the
+/// walk, so that each copy is inlined where it is called).
 #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
 #[inline]
-fn walk<const ANY: bool, const OTHERS: bool, const PARALLEL: bool>(
+fn walk<const ANY: bool, const OTHERS: bool, const PARALLEL: bool, const LANE: bool>(
     w: &WideBvh,
     r: &PreparedRay,
+    start: u32,
     best: &mut Best,
     stack: &mut [WideStackItem],
     stats: &mut TraceStats,
@@ -316,7 +344,7 @@ fn walk<const ANY: bool, const OTHERS: bool, const PARALLEL: bool>(
     let (mut fault, mut stopped) = (false, false);
     // The entry walked now: the nearest one a node sent the ray on to,
     // or the nearest waiting on the stack.
-    let mut cur = 0u32;
+    let mut cur = start;
     'walk: loop {
         if budget == 0 {
             fault = true;
@@ -440,7 +468,7 @@ fn walk<const ANY: bool, const OTHERS: bool, const PARALLEL: bool>(
             while j < count {
                 let a = &run[j];
                 let b = run.get(j + 1).unwrap_or(&EMPTY_BLOCK);
-                let ps = triangles8(&tl, a, b, limit);
+                let ps = triangles8::<ANY, OTHERS, PARALLEL>(&tl, a, b, limit);
                 let mut alone = ps.edge;
                 if OTHERS {
                     alone |= other_slots(a, nt) | other_slots(b, nt) << 4;
@@ -510,10 +538,10 @@ fn trace<const ANY: bool>(
     };
     let parallel = r.inv_dir.to_array().iter().any(|i| i.is_infinite());
     match (w.has_others(), parallel) {
-        (false, false) => walk::<ANY, false, false>(w, &r, best, stack, stats),
-        (false, true) => walk::<ANY, false, true>(w, &r, best, stack, stats),
-        (true, false) => walk::<ANY, true, false>(w, &r, best, stack, stats),
-        (true, true) => walk::<ANY, true, true>(w, &r, best, stack, stats),
+        (false, false) => walk::<ANY, false, false, false>(w, &r, 0, best, stack, stats),
+        (false, true) => walk::<ANY, false, true, false>(w, &r, 0, best, stack, stats),
+        (true, false) => walk::<ANY, true, false, false>(w, &r, 0, best, stack, stats),
+        (true, true) => walk::<ANY, true, true, false>(w, &r, 0, best, stack, stats),
     }
 }
 

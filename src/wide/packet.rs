@@ -29,6 +29,7 @@
 //! enters a box when the largest near bound is at most the smallest far
 //! bound (with the single test's slack) and the largest limit of its rays.
 
+use super::avx2::{walk_from, Best};
 use super::block::{LeafBlock, NO_PRIM};
 use super::node::{leaf_run, EMPTY_SLOT, LEAF_BIT, LOWER, UPPER, WIDTH};
 use super::traverse::{WideStackItem, FAR_SLACK};
@@ -39,6 +40,10 @@ use core::arch::x86_64::*;
 
 /// Rays a packet holds.
 pub const PACKET_LANES: usize = 8;
+
+/// Rays left in a subtree at or below which each walks it alone (the
+/// one-ray walk from that entry).
+const ALONE: u32 = 1;
 
 /// Eight lanes from an array.
 #[inline(always)]
@@ -352,10 +357,16 @@ const BIAS: i32 = i32::MIN;
 /// One triangle (slot `slot` of `b`) against the packet's rays `on`,
 /// within each lane's `t_max`: the lanes hit (`t`, `u`, `v`), and the lanes
 /// on an edge in single precision. The one-triangle test's operations in
-/// its order, a ray a lane.
+/// its order, a ray a lane. Generic over its walk's query so that each
+/// walk has its own copy to inline.
 #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
 #[inline]
-fn triangle(p: &Packet, b: &LeafBlock, slot: usize, t_max: __m256) -> (u32, u32, [__m256; 3]) {
+fn triangle<const ANY: bool>(
+    p: &Packet,
+    b: &LeafBlock,
+    slot: usize,
+    t_max: __m256,
+) -> (u32, u32, [__m256; 3]) {
     let c = &b.corners;
     let [kx, ky, kz] = p.k;
     let corner = |k: usize| {
@@ -485,7 +496,36 @@ fn walk<const ANY: bool>(
             break;
         }
         budget -= 1;
-        if cur & LEAF_BIT == 0 {
+        let here = lanes & open;
+        if here.count_ones() <= ALONE && here != 0 {
+            // Few rays left in this subtree: each walks it alone, where a
+            // node costs a ray one box test, not the packet's.
+            let mut m = here;
+            while m != 0 {
+                let i = m.trailing_zeros() as usize;
+                m &= m - 1;
+                let lt: [f32; 8] = bytemuck::cast(limits);
+                let mut r = rays[i];
+                r.t_max = lt[i];
+                let mut one = Best {
+                    hit: Hit::MISS,
+                    from_block: None,
+                };
+                let hit = walk_from::<ANY>(w, &r, cur, &mut one, &mut stack[sp..], stats);
+                if ANY {
+                    if hit {
+                        open &= !(1 << i);
+                    }
+                } else if one.hit.is_hit() {
+                    let from = one.from_block.map_or(-1, |(b, s)| (b * 4 + s) as i32);
+                    settle_lane(best, i, &one.hit, from);
+                }
+            }
+            if ANY && open == 0 {
+                break;
+            }
+            limits = _mm256_min_ps(best.t, p.t_max);
+        } else if cur & LEAF_BIT == 0 {
             let Some(n) = nodes.get(cur as usize) else {
                 fault = true;
                 break;
@@ -552,7 +592,7 @@ fn walk<const ANY: bool>(
                         break;
                     }
                     tests += 1;
-                    let (hit, edge, tuv) = triangle(p, b, slot, limits);
+                    let (hit, edge, tuv) = triangle::<ANY>(p, b, slot, limits);
                     let hit = hit & open & open_here;
                     if ANY && hit != 0 {
                         open &= !hit;
@@ -596,7 +636,7 @@ fn walk<const ANY: bool>(
                                 open &= !(1 << i);
                                 continue;
                             }
-                            settle_lane(best, i, &h);
+                            settle_lane(best, i, &h, -1);
                         }
                         if ANY {
                             if open == 0 {
@@ -636,11 +676,11 @@ fn walk<const ANY: bool>(
     p.on & !open
 }
 
-/// Lane `i`'s best becomes `h` when it beats it (the scene's own test
-/// found `h`: no block slot to take the normal from).
+/// Lane `i`'s best becomes `h` when it beats it, found in block slot
+/// `from` (`block * 4 + slot`; -1 when the scene's own test found it).
 #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
 #[inline]
-fn settle_lane(best: &mut Lanes, i: usize, h: &Hit) {
+fn settle_lane(best: &mut Lanes, i: usize, h: &Hit, from: i32) {
     let mut t: [f32; 8] = bytemuck::cast(best.t);
     let mut u: [f32; 8] = bytemuck::cast(best.u);
     let mut v: [f32; 8] = bytemuck::cast(best.v);
@@ -653,7 +693,7 @@ fn settle_lane(best: &mut Lanes, i: usize, h: &Hit) {
         u[i] = h.u;
         v[i] = h.v;
         key[i] = hk;
-        at[i] = -1;
+        at[i] = from;
         best.t = bytemuck::cast(t);
         best.u = bytemuck::cast(u);
         best.v = bytemuck::cast(v);
