@@ -17,7 +17,7 @@
 
 use super::block::{LeafBlock, EMPTY_BLOCK, NO_PRIM};
 use super::node::{leaf_run, EMPTY_SLOT, LEAF_BIT, LOWER, UPPER, WIDTH};
-use super::traverse::{WideStackItem, FAR_SLACK};
+use super::traverse::{read_entry_ahead, WideStackItem, FAR_SLACK};
 use super::WideBvh;
 use crate::geom::leaf::beats;
 use crate::geom::{Hit, PreparedRay, Ray, GEOM_TRIANGLES};
@@ -345,6 +345,9 @@ fn walk<const ANY: bool, const OTHERS: bool, const PARALLEL: bool, const LANE: b
     // The entry walked now: the nearest one a node sent the ray on to,
     // or the nearest waiting on the stack.
     let mut cur = start;
+    // What loads read ahead (where a read-ahead is a load, not a
+    // prefetch), kept so that they stay.
+    let mut touch = 0u32;
     'walk: loop {
         if budget == 0 {
             fault = true;
@@ -424,6 +427,9 @@ fn walk<const ANY: bool, const OTHERS: bool, const PARALLEL: bool, const LANE: b
                     } else {
                         (c0, c1, tn[i1])
                     };
+                    if !ANY && w.read_ahead {
+                        read_entry_ahead(w, far, &mut touch);
+                    }
                     stack[sp] = WideStackItem {
                         child: far,
                         t: far_t,
@@ -443,6 +449,9 @@ fn walk<const ANY: bool, const OTHERS: bool, const PARALLEL: bool, const LANE: b
                         child: n.child[i],
                         t: tn[i],
                     };
+                    if !ANY && w.read_ahead {
+                        read_entry_ahead(w, e.child, &mut touch);
+                    }
                     let mut k = sp;
                     if !ANY {
                         while k > base && stack[k - 1].t < e.t {
@@ -511,6 +520,7 @@ fn walk<const ANY: bool, const OTHERS: bool, const PARALLEL: bool, const LANE: b
         break;
     }
     let _ = EMPTY_SLOT;
+    core::hint::black_box(touch);
     stats.traversal_steps += interior + leaves;
     stats.interior_steps += interior;
     stats.leaf_steps += leaves;

@@ -32,7 +32,7 @@
 use super::avx2::{walk_from, Best};
 use super::block::{LeafBlock, NO_PRIM};
 use super::node::{leaf_run, EMPTY_SLOT, LEAF_BIT, LOWER, UPPER, WIDTH};
-use super::traverse::{WideStackItem, FAR_SLACK};
+use super::traverse::{read_entry_ahead, WideStackItem, FAR_SLACK};
 use super::WideBvh;
 use crate::geom::{Hit, PreparedRay, Ray, GEOM_TRIANGLES};
 use crate::TraceStats;
@@ -490,6 +490,7 @@ fn walk<const ANY: bool>(
     // The entry walked now and the lanes whose rays enter its box; a
     // waiting entry takes two stack items (the entry, then its lanes).
     let (mut cur, mut lanes) = (0u32, p.on);
+    let mut touch = 0u32;
     'walk: loop {
         if budget == 0 {
             fault = true;
@@ -558,6 +559,9 @@ fn walk<const ANY: bool>(
                         child: n.child[i],
                         t: tn[i],
                     };
+                    if w.read_ahead {
+                        read_entry_ahead(w, e.child, &mut touch);
+                    }
                     let mut k = sp;
                     if !ANY {
                         while k > base && stack[k - 2].t < e.t {
@@ -663,6 +667,7 @@ fn walk<const ANY: bool>(
         break;
     }
     let _ = EMPTY_SLOT;
+    core::hint::black_box(touch);
     stats.traversal_steps += interior + leaves;
     stats.interior_steps += interior;
     stats.leaf_steps += leaves;

@@ -523,7 +523,7 @@ pub(crate) fn reads_ahead(nodes: &[WideNode], blocks: &[LeafBlock]) -> bool {
 /// a block (160 bytes) three or four: one word at bytes 0, 64, 128 and
 /// the last of each.
 #[inline(always)]
-fn read_entry_ahead(w: &WideBvh, child: u32, touch: &mut u32) {
+pub(super) fn read_entry_ahead(w: &WideBvh, child: u32, touch: &mut u32) {
     if child & LEAF_BIT == 0 {
         if let Some(n) = w.nodes.get(child as usize) {
             for row in [0, 2, 4] {
