@@ -194,6 +194,36 @@ fn packets_answer_as_the_portable_walk_on_tiles_and_shadows() {
     }
 }
 
+/// Packets over a scene of triangles, spheres and cones: the spheres and
+/// cones of a leaf tested lane by lane answer as the portable walk's.
+#[test]
+fn packets_with_spheres_and_cones_answer_as_the_portable_walk() {
+    let mut rng = Rng(31);
+    let mut o = random_scene(&mut rng, 300, 300, 300, 1.5);
+    sphere_mesh(&mut o, Vec3::new(0.0, -0.5, 0.0), 0.8, 12);
+    let scene = o.scene();
+    for leaf in [1, 8] {
+        let owned = OwnedWide::new(&scene, leaf).unwrap();
+        let w = owned.view(scene).unwrap();
+        let rays = tiles(Vec3::new(0.4, 0.9, 4.0), 40, 32, 0.5);
+        let what = format!("mixed leaf {leaf}");
+        let hit = agree(&w, &rays, &what);
+        assert!(hit > rays.len() / 4, "{what}: {hit} hits");
+        let mut stk = stack::<WideStackItem>(w.stack_len());
+        let mut st = TraceStats::default();
+        let hits: Vec<Hit> = rays
+            .iter()
+            .map(|r| w.intersect(r, &mut stk, &mut st))
+            .collect();
+        assert!(hits.iter().any(|h| h.geom_id == 1) && hits.iter().any(|h| h.geom_id == 2));
+        agree(
+            &w,
+            &shadows(&rays, &hits, Vec3::new(3.0, 5.0, 2.0)),
+            &format!("{what} shadows"),
+        );
+    }
+}
+
 /// Packets that cannot be traced together, or only in part: mixed
 /// direction signs, zero and subnormal components, invalid rays, segments
 /// ending before the surface, starting past it.

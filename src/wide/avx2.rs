@@ -189,10 +189,9 @@ pub(super) struct Best {
     pub(super) from_block: Option<(usize, usize)>,
 }
 
-/// A valid ray's walk over a scene of triangles alone, from entry `start`
-/// of `w` (a packet's lane walking on alone): a closest hit into `best`,
-/// or (`ANY`) whether anything is hit. The ray's inverse direction is
-/// finite (a packet's is).
+/// A valid ray's walk from entry `start` of `w` (a packet's lane walking
+/// on alone): a closest hit into `best`, or (`ANY`) whether anything is
+/// hit. The ray's inverse direction is finite (a packet's is).
 #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
 #[inline]
 pub(super) fn walk_from<const ANY: bool>(
@@ -203,8 +202,13 @@ pub(super) fn walk_from<const ANY: bool>(
     stack: &mut [WideStackItem],
     stats: &mut TraceStats,
 ) -> bool {
-    let r = PreparedRay::for_triangles(ray);
-    walk::<ANY, false, false, true>(w, &r, start, best, stack, stats)
+    if w.has_others() {
+        let r = PreparedRay::new(ray);
+        walk::<ANY, true, false, true>(w, &r, start, best, stack, stats)
+    } else {
+        let r = PreparedRay::for_triangles(ray);
+        walk::<ANY, false, false, true>(w, &r, start, best, stack, stats)
+    }
 }
 
 impl Best {

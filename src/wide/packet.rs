@@ -14,10 +14,11 @@
 //!
 //! A packet is traced together when its rays agree on the sign of every
 //! direction component (none zero or too small to invert) and on the
-//! watertight test's axes, and the scene is triangles alone: a tile of
-//! camera rays, or the shadow rays from one towards a light. Rays of
-//! other packets, and rays whose axes differ from the packet's first, are
-//! traced alone ([`WideBvh::intersect_avx2`]).
+//! watertight test's axes: a tile of camera rays, or the shadow rays from
+//! one towards a light. Rays of other packets, and rays whose axes differ
+//! from the packet's first, are traced alone
+//! ([`WideBvh::intersect_avx2`]). A leaf's spheres and cones are tested
+//! lane by lane by the scene's own tests.
 //!
 //! Why the bounds hold: along an axis where every inverse direction is
 //! positive, a ray's near distance is `RN(RN(near - o) * inv)` with `o` in
@@ -458,9 +459,10 @@ fn max_of(v: __m256, on: u32) -> f32 {
     _mm256_cvtss_f32(hi)
 }
 
-/// Lane `i`'s ray prepared as a single walk prepares it.
+/// Lane `i`'s ray prepared as a single walk prepares it (the sphere and
+/// cone frame too: the scene's own tests take it).
 fn lane_ray(rays: &[Ray], i: usize) -> PreparedRay {
-    PreparedRay::for_triangles(&rays[i])
+    PreparedRay::new(&rays[i])
 }
 
 /// The walk of one packet over a scene of triangles: closest hits into
@@ -491,6 +493,10 @@ fn walk<const ANY: bool>(
     // waiting entry takes two stack items (the entry, then its lanes).
     let (mut cur, mut lanes) = (0u32, p.on);
     let mut touch = 0u32;
+    let nt = w.scene.triangles.len();
+    // Each lane's ray as the scene's own tests take it, made when first
+    // needed (a sphere or a cone in a leaf).
+    let mut lanes_ray = LaneRays::default();
     'walk: loop {
         if budget == 0 {
             fault = true;
@@ -596,6 +602,32 @@ fn walk<const ANY: bool>(
                         break;
                     }
                     tests += 1;
+                    if prim as usize >= nt {
+                        // A sphere or a cone: each lane by the scene's test.
+                        let mut m = open & open_here;
+                        while m != 0 {
+                            let i = m.trailing_zeros() as usize;
+                            m &= m - 1;
+                            let r = lanes_ray.get_or_insert_with(i, || PreparedRay::new(&rays[i]));
+                            let lt: [f32; 8] = bytemuck::cast(limits);
+                            let Some(h) = w.scene.intersect_prim(prim as usize, r, lt[i]) else {
+                                continue;
+                            };
+                            if ANY {
+                                open &= !(1 << i);
+                            } else {
+                                settle_lane(best, i, &h, -1);
+                            }
+                        }
+                        if ANY {
+                            if open == 0 {
+                                break 'walk;
+                            }
+                        } else {
+                            limits = _mm256_min_ps(best.t, p.t_max);
+                        }
+                        continue;
+                    }
                     let (hit, edge, tuv) = triangle::<ANY>(p, b, slot, limits);
                     let hit = hit & open & open_here;
                     if ANY && hit != 0 {
@@ -679,6 +711,19 @@ fn walk<const ANY: bool>(
         return p.on;
     }
     p.on & !open
+}
+
+/// The packet's rays prepared one by one for the scene's own tests,
+/// each when first asked for.
+#[derive(Default)]
+struct LaneRays([Option<PreparedRay>; PACKET_LANES]);
+
+impl LaneRays {
+    /// Lane `i`'s ray, made by `make` the first time.
+    #[inline(always)]
+    fn get_or_insert_with(&mut self, i: usize, make: impl FnOnce() -> PreparedRay) -> &PreparedRay {
+        self.0[i].get_or_insert_with(make)
+    }
 }
 
 /// Lane `i`'s best becomes `h` when it beats it, found in block slot
@@ -776,9 +821,6 @@ impl WideBvh<'_> {
         stats: &mut TraceStats,
     ) -> u32 {
         let all = (1u32 << rays.len()) - 1;
-        if self.has_others() {
-            return all;
-        }
         let Some(p) = Packet::load(rays) else {
             return all;
         };
@@ -822,10 +864,13 @@ impl WideBvh<'_> {
                 }
             } else {
                 // The scene's own test found it: ask it again for the
-                // whole answer (the same hit, its normal included).
+                // whole answer (the same hit, its normal included), by
+                // the primitive's global index.
                 let r = lane_ray(rays, i);
-                self.scene
-                    .intersect_prim((k & !(3 << 30)) as usize, &r, t[i])
+                let (geom, id) = ((k >> 30) as usize, (k & !(3 << 30)) as usize);
+                let sc = &self.scene;
+                let first = [0, sc.triangles.len(), sc.triangles.len() + sc.spheres.len()];
+                sc.intersect_prim(first[geom.min(2)] + id, &r, t[i])
                     .unwrap_or(Hit::MISS)
             };
         }
@@ -851,9 +896,6 @@ impl WideBvh<'_> {
         stats: &mut TraceStats,
     ) -> u32 {
         let all = (1u32 << rays.len()) - 1;
-        if self.has_others() {
-            return all;
-        }
         let Some(p) = Packet::load(rays) else {
             return all;
         };
