@@ -164,10 +164,11 @@ impl Packet {
     /// differ or a component too small to invert. Lanes whose watertight
     /// axes differ from the first valid lane's are left out of `on`. Each
     /// lane's constants are [`PreparedRay::new`]'s bit for bit: the same
-    /// IEEE operations.
+    /// IEEE operations. Generic over the query so that each has its own
+    /// copy to inline.
     #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
     #[inline]
-    fn load(rays: &[Ray]) -> Option<Packet> {
+    fn load<const ANY: bool>(rays: &[Ray]) -> Option<Packet> {
         let [ox, oy, oz, t0, dx, dy, dz, t1] = transpose(rays);
         let present = (1u32 << rays.len().min(PACKET_LANES)) - 1;
         let zero = _mm256_setzero_ps();
@@ -821,7 +822,7 @@ impl WideBvh<'_> {
         stats: &mut TraceStats,
     ) -> u32 {
         let all = (1u32 << rays.len()) - 1;
-        let Some(p) = Packet::load(rays) else {
+        let Some(p) = Packet::load::<false>(rays) else {
             return all;
         };
         let valid = p.valid;
@@ -896,7 +897,7 @@ impl WideBvh<'_> {
         stats: &mut TraceStats,
     ) -> u32 {
         let all = (1u32 << rays.len()) - 1;
-        let Some(p) = Packet::load(rays) else {
+        let Some(p) = Packet::load::<true>(rays) else {
             return all;
         };
         let valid = p.valid;
