@@ -598,8 +598,11 @@ pub unsafe extern "C" fn coray_bvh_validate(
                 bvh::validate_rtree(&b, &p, &h.rtree, stk)?
             }
             None => {
+                // A static build's capacity is its scene's primitive
+                // count; degenerate ones stay out of the references.
                 let i = b.info();
-                if h.capacity != i.ref_count || i.max_children != 2 {
+                let prims: u64 = h.scene_counts.iter().map(|&c| c as u64).sum();
+                if h.capacity as u64 != prims || i.max_children != 2 {
                     return Err(CorayStatus::CorruptArena);
                 }
                 b.validate(None, stk)?
