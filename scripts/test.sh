@@ -18,7 +18,7 @@ command -v pkg-config >/dev/null || need+=(pkg-config)
 if [ ${#need[@]} -gt 0 ]; then
     echo "installing ${need[*]}"
     apt-get update -qq
-    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${need[@]}"
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-remove "${need[@]}"
 fi
 for tool in cc c++ nm; do
     command -v "$tool" >/dev/null || { echo "missing $tool"; exit 1; }
