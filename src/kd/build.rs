@@ -771,7 +771,10 @@ impl<'s, 'a> Builder<'s, 'a> {
                 // differently. Nodes thinner than that keep their faces.
                 let thick = (hi - lo).max(lo.abs()).max(hi.abs()) * FACE_CELL;
                 let inside = if p == lo { p + thick } else { p - thick };
-                if 2.0 * thick < hi - lo {
+                // Strictly inside: in a node of subnormal thickness the
+                // cell rounds to nothing and would put the plane on the
+                // face (which `validate` refuses).
+                if 2.0 * thick < hi - lo && inside > lo && inside < hi {
                     if p == lo {
                         consider(inside, planars + starts, nr, 0);
                     } else {
