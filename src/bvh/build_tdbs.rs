@@ -229,16 +229,31 @@ pub(crate) fn build<'a>(
         // (criterion, axis, left count): smaller criterion is better.
         let mut best: Option<(f64, usize, usize)> = None;
         let mut bounds = Aabb::EMPTY;
-        for (axis, o) in order.iter().enumerate() {
-            bounds = sweep(
-                &o[first..first + count],
-                boxes,
-                suffix,
-                criterion,
-                tests,
-                axis,
-                &mut best,
-            );
+        let run = &refs[first..first + count];
+        let first_box = boxes[run[0] as usize];
+        if run.iter().all(|&p| boxes[p as usize] == first_box) {
+            // Identical boxes: every partition prices alike, and the
+            // sweeps' first one (one primitive off) would make a chain of
+            // `count` levels, O(n^2) to build. Halve the run instead: the
+            // same price, O(n log n) over such a run.
+            let c = match criterion {
+                Criterion::Balanced => 0.0,
+                _ => half_area(&first_box) * tests,
+            };
+            best = Some((c, 0, count / 2));
+            bounds = first_box;
+        } else {
+            for (axis, o) in order.iter().enumerate() {
+                bounds = sweep(
+                    &o[first..first + count],
+                    boxes,
+                    suffix,
+                    criterion,
+                    tests,
+                    axis,
+                    &mut best,
+                );
+            }
         }
         let (c, axis, k) = best.expect("count >= 2");
         if let (
