@@ -2,16 +2,24 @@
 //! every object starts as a cluster; the two clusters whose joint box has
 //! the smallest surface area are joined, until one is left.
 //!
-//! Each cluster keeps its best partner. Joining A and B cannot make a
-//! better partner for any other cluster C (the box of A and B and C holds
-//! the box of A and C), so only clusters whose partner was A or B look
-//! again: the same tree as the thesis' quadratic search, in O(n^2) time
-//! with O(n) work per join only for the clusters that lost their partner.
+//! Each cluster keeps its best partner and that joint area. Joining A and
+//! B cannot make a better partner for any other cluster C (the box of A
+//! and B and C holds the box of A and C), so the area a cluster recorded
+//! stays a lower bound of its best one when it loses its partner: such a
+//! cluster is marked stale and looks again only when its bound is the
+//! smallest (the first such cluster is taken, as the thesis' search takes
+//! the first smallest area). That is the thesis' tree, found in O(n^2):
+//! where many clusters lose one partner at once (identical boxes, which
+//! all name the same first cluster), looking again eagerly was O(n^3).
 
 use super::{binary, check_storage, gather, requirements, Builder, Bvh, BvhNode};
 use super::{BvhScratch, BvhStorage};
 use crate::geom::{Aabb, Scene};
 use crate::Error;
+
+/// Set in a cluster's link when its partner was joined away: its key is
+/// then a lower bound of its best joint area, not the area.
+const STALE: u32 = 1 << 31;
 
 fn joint_area(a: &BvhNode, b: &BvhNode) -> f32 {
     a.bounds().union(&b.bounds()).area()
@@ -56,12 +64,20 @@ pub(crate) fn build<'a>(
     }
     let (mut m, mut top) = (n, 1usize);
     while m > 1 {
-        let mut a = 0;
-        for k in 1..m {
-            if keys[k] < keys[a] {
-                a = k;
+        // The first cluster of the smallest bound; a stale one looks
+        // again (its bound only grows) until the first is up to date.
+        let a = loop {
+            let mut a = 0;
+            for k in 1..m {
+                if keys[k] < keys[a] {
+                    a = k;
+                }
             }
-        }
+            if links[a] & STALE == 0 {
+                break a;
+            }
+            (links[a], keys[a]) = best_partner(clusters, a, m);
+        };
         let b = links[a] as usize;
         let (lo, hi) = (a.min(b), a.max(b));
         nodes[top] = clusters[lo];
@@ -75,12 +91,12 @@ pub(crate) fn build<'a>(
         keys[hi] = keys[last];
         links[hi] = links[last];
         m -= 1;
-        for k in 0..m {
-            let p = links[k] as usize;
+        for (k, link) in links[..m].iter_mut().enumerate() {
+            let p = (*link & !STALE) as usize;
             if k == lo || p == lo || p == hi {
-                (links[k], keys[k]) = best_partner(clusters, k, m);
+                *link |= STALE;
             } else if p == last {
-                links[k] = hi as u32;
+                *link = hi as u32 | (*link & STALE);
             }
         }
     }
