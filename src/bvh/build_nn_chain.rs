@@ -12,8 +12,15 @@
 //! box centres (median splits, implicit layout, `2n - 1` boxes). A cluster
 //! lives in the leaf of its first primitive; a join keeps the lower slot,
 //! empties the other and refits both root paths. A query descends nearer
-//! children first and prunes a subtree whose box, joined to the query's,
-//! is already larger than the best pair found.
+//! children first and prunes a subtree whose lower bound is already
+//! larger than the best pair found. The bound uses two boxes per index
+//! node: the union of its clusters, and their "inner" box (the largest
+//! of their minima, the smallest of their maxima): every cluster below
+//! reaches at least that far, so the joint box of the query with any of
+//! them spans at least the query joined to the inner box. The bound is
+//! exact when the clusters below are identical, which keeps equal boxes
+//! (ties everywhere) at O(log n) a query: with the union alone, 50,000
+//! identical triangles and 50,000 identical spheres took 27 s.
 
 use super::{binary, check_storage, gather, Bvh, BvhNode};
 use super::{BvhScratch, BvhStorage};
@@ -27,7 +34,7 @@ pub(crate) fn chain_requirements(n: usize) -> super::BvhRequirements {
     super::BvhRequirements {
         nodes: (2 * n).saturating_sub(1).max(1),
         refs: n,
-        boxes: n + (2 * n).saturating_sub(1),
+        boxes: n + 2 * (2 * n).saturating_sub(1),
         keys: 0,
         links: n,
         clusters: n,
@@ -38,40 +45,71 @@ fn centre(b: &Aabb, axis: usize) -> f32 {
     0.5 * (b.min[axis] + b.max[axis])
 }
 
-/// The smallest surface area of `x` grown to touch `n` (a lower bound of
-/// `x`'s joint area with anything inside `n`).
-fn touch_area(x: &Aabb, n: &Aabb) -> f32 {
-    let mut g = *x;
-    for a in 0..3 {
-        if n.max[a] < x.min[a] {
-            g.min[a] = n.max[a];
-        } else if n.min[a] > x.max[a] {
-            g.max[a] = n.min[a];
-        }
+/// The inner box of nothing: the identity of [`inner_join`].
+const NO_INNER: Aabb = Aabb {
+    min: crate::Vec3::splat(f32::NEG_INFINITY),
+    max: crate::Vec3::splat(f32::INFINITY),
+};
+
+/// The inner box of two groups: the larger minima, the smaller maxima
+/// (it may be inverted; it is a bound, not a region).
+fn inner_join(a: &Aabb, b: &Aabb) -> Aabb {
+    Aabb {
+        min: a.min.max(b.min),
+        max: a.max.min(b.max),
     }
-    g.area()
+}
+
+/// A lower bound of `x`'s joint area with any cluster whose minima are at
+/// most `inner.min` and maxima at least `inner.max`. Only comparisons, then
+/// the area's own arithmetic: rounding keeps it at most the joint area
+/// `Aabb::union(..).area()` computes.
+fn joint_area_bound(x: &Aabb, inner: &Aabb) -> f32 {
+    Aabb {
+        min: x.min.min(inner.min),
+        max: x.max.max(inner.max),
+    }
+    .area()
 }
 
 /// The kd-tree of cluster boxes: node `i` over slots `lo..hi` has its left
 /// child at `i + 1` (slots `lo..mid`) and its right child at
 /// `i + 2 * (mid - lo)`, `mid = (lo + hi) / 2`.
 struct Index<'s> {
+    /// Per node, the union of its clusters' boxes.
     boxes: &'s mut [Aabb],
+    /// Per node, its clusters' inner box ([`inner_join`]).
+    inner: &'s mut [Aabb],
     clusters: &'s mut [BvhNode],
     n: usize,
 }
 
 impl Index<'_> {
-    fn fill(&mut self, i: usize, lo: usize, hi: usize) -> Aabb {
-        let b = if hi - lo == 1 {
-            self.clusters[lo].bounds()
+    /// A leaf's two boxes: its cluster's, or nothing once emptied.
+    fn leaf_boxes(&self, slot: usize) -> (Aabb, Aabb) {
+        let b = self.clusters[slot].bounds();
+        (b, if b.is_empty() { NO_INNER } else { b })
+    }
+
+    fn fill(&mut self, i: usize, lo: usize, hi: usize) {
+        let (b, inner) = if hi - lo == 1 {
+            self.leaf_boxes(lo)
         } else {
             let mid = (lo + hi) / 2;
-            let l = self.fill(i + 1, lo, mid);
-            l.union(&self.fill(i + 2 * (mid - lo), mid, hi))
+            let (l, r) = (i + 1, i + 2 * (mid - lo));
+            self.fill(l, lo, mid);
+            self.fill(r, mid, hi);
+            self.joined(l, r)
         };
         self.boxes[i] = b;
-        b
+        self.inner[i] = inner;
+    }
+
+    fn joined(&self, l: usize, r: usize) -> (Aabb, Aabb) {
+        (
+            self.boxes[l].union(&self.boxes[r]),
+            inner_join(&self.inner[l], &self.inner[r]),
+        )
     }
 
     /// Recomputes the boxes on the path from the root to `slot`.
@@ -88,10 +126,10 @@ impl Index<'_> {
                 (i, lo) = (i + 2 * (mid - lo), mid);
             }
         }
-        self.boxes[i] = self.clusters[slot].bounds();
+        (self.boxes[i], self.inner[i]) = self.leaf_boxes(slot);
         for &(i, lo, hi) in path[..d].iter().rev() {
             let mid = (lo + hi) / 2;
-            self.boxes[i] = self.boxes[i + 1].union(&self.boxes[i + 2 * (mid - lo)]);
+            (self.boxes[i], self.inner[i]) = self.joined(i + 1, i + 2 * (mid - lo));
         }
     }
 
@@ -118,7 +156,7 @@ impl Index<'_> {
             if self.boxes[k].is_empty() {
                 f32::INFINITY
             } else {
-                touch_area(&xb, &self.boxes[k])
+                joint_area_bound(&xb, &self.inner[k])
             }
         });
         let order = if lb[1] < lb[0] { [1, 0] } else { [0, 1] };
@@ -190,6 +228,7 @@ pub(crate) fn build<'a>(
         ..
     } = scratch;
     let (prim_boxes, index_boxes) = boxes.split_at_mut(prims);
+    let (index_boxes, index_inner) = index_boxes.split_at_mut((2 * prims).saturating_sub(1));
     let n = gather(scene, source, prim_boxes, refs)?;
     if n == 0 {
         nodes[0] = BvhNode::leaf(&Aabb::EMPTY, 0, 0);
@@ -201,6 +240,7 @@ pub(crate) fn build<'a>(
     }
     let mut index = Index {
         boxes: index_boxes,
+        inner: index_inner,
         clusters,
         n,
     };
