@@ -15,22 +15,6 @@ use coray::owned::{
 use coray::proj::{Criteria, ProjBuilder, ProjPlane, ProjScheme};
 use coray::wide::WideStackItem;
 use coray::{Accel, Camera, Hit, Ray, TraceStats, Vec3};
-use std::sync::mpsc;
-use std::time::Duration;
-
-/// Runs `f` on its own thread; fails when it panics or takes longer than `secs`.
-fn watchdog(secs: u64, what: &str, f: impl FnOnce() + Send + 'static) {
-    let (tx, rx) = mpsc::channel();
-    std::thread::spawn(move || {
-        f();
-        let _ = tx.send(());
-    });
-    match rx.recv_timeout(Duration::from_secs(secs)) {
-        Ok(()) => {}
-        Err(mpsc::RecvTimeoutError::Timeout) => panic!("{what}: no answer within {secs} s"),
-        Err(mpsc::RecvTimeoutError::Disconnected) => panic!("{what}: panicked"),
-    }
-}
 
 fn scene(seed: u64) -> OwnedScene {
     random_scene(&mut Rng(seed), 60, 20, 10, 10.0)

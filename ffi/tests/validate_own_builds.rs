@@ -36,7 +36,7 @@ fn arrays(kind: usize) -> Arrays {
         spheres: vec![0., 1., 0., 0.5],
         cones: vec![2., 0., 0., 0.3, 2., 1., 0., 0.1],
     };
-    let mut tri = |a: &mut Arrays, v: [[f32; 3]; 3]| {
+    let tri = |a: &mut Arrays, v: [[f32; 3]; 3]| {
         let first = (a.vertices.len() / 3) as u32;
         for p in v {
             a.vertices.extend_from_slice(&p);

@@ -299,3 +299,20 @@ pub fn with_empty_leaves(nodes: &[coray::kd::KdNode]) -> Vec<coray::kd::KdNode> 
     }
     out
 }
+
+/// Runs `f` on a thread of its own and fails when it has not returned
+/// within `secs` seconds (a hang, or a build gone superlinear) or when it
+/// panicked.
+pub fn watchdog(secs: u64, what: &str, f: impl FnOnce() + Send + 'static) {
+    use std::sync::mpsc;
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        f();
+        let _ = tx.send(());
+    });
+    match rx.recv_timeout(std::time::Duration::from_secs(secs)) {
+        Ok(()) => {}
+        Err(mpsc::RecvTimeoutError::Timeout) => panic!("{what}: no answer within {secs} s"),
+        Err(mpsc::RecvTimeoutError::Disconnected) => panic!("{what}: panicked"),
+    }
+}
