@@ -72,7 +72,32 @@ fn stats_counts_match_the_design_table() {
                 "rstar-reinsert"
             ]
         );
+        assert_eq!(v["skipped"], serde_json::json!([]), "{name}");
     }
+}
+
+/// Above 40,000 primitives `stats` leaves the quadratic matching out and
+/// says so (the Stanford bunny's took 42 s), keeping the chain.
+#[test]
+fn stats_skips_the_quadratic_matching_on_large_scenes() {
+    let d = tmp("stats_large");
+    let (code, out, err) = coray(&["stats", "random:36400", "--json"], &d);
+    assert_eq!(code, 0, "{err}");
+    let v = json(&out);
+    assert_eq!(v["objects"], 40_040);
+    let names: Vec<&str> = v["structures"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["structure"].as_str().unwrap())
+        .collect();
+    assert!(
+        names.contains(&"nn-chain") && !names.contains(&"nn"),
+        "{names:?}"
+    );
+    let skipped = v["skipped"].as_array().unwrap();
+    assert_eq!(skipped.len(), 1);
+    assert!(skipped[0].as_str().unwrap().starts_with("nn: quadratic"));
 }
 
 #[test]
