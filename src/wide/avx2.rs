@@ -212,6 +212,14 @@ pub(super) fn walk_from<const ANY: bool>(
 }
 
 impl Best {
+    /// The best hit, its normal made when a block found it.
+    pub(super) fn finish(mut self, w: &WideBvh) -> Hit {
+        if let Some((b, slot)) = self.from_block {
+            self.hit.ng = w.blocks[b].normal(slot);
+        }
+        self.hit
+    }
+
     /// Keeps `h` when it beats the best so far; true when it does.
     #[inline(always)]
     fn offer(&mut self, h: Hit, at: Option<(usize, usize)>) -> bool {
@@ -588,12 +596,7 @@ impl WideBvh<'_> {
             from_block: None,
         };
         trace::<false>(self, ray, &mut best, stack, stats);
-        if let Some((b, slot)) = best.from_block {
-            let c = &self.blocks[b].corners;
-            let v = |k: usize| crate::Vec3::new(c[k][0][slot], c[k][1][slot], c[k][2][slot]);
-            best.hit.ng = (v(0) - v(1)).cross(v(2) - v(0));
-        }
-        best.hit
+        best.finish(self)
     }
 
     /// [`WideBvh::occluded`] written for AVX2: the same answers.

@@ -35,7 +35,7 @@ use super::block::{LeafBlock, NO_PRIM};
 use super::node::{leaf_run, EMPTY_SLOT, LEAF_BIT, LOWER, UPPER, WIDTH};
 use super::traverse::{read_entry_ahead, WideStackItem, FAR_SLACK};
 use super::WideBvh;
-use crate::geom::{Hit, PreparedRay, Ray, GEOM_TRIANGLES};
+use crate::geom::{Hit, PreparedRay, Ray};
 use crate::TraceStats;
 use core::arch::x86_64::*;
 
@@ -110,34 +110,18 @@ fn range(v: __m256, on: __m256) -> (__m256, __m256) {
     (lo, hi)
 }
 
-/// The eight rays' fields, lane by lane: origin x, y, z, `t_min`,
-/// direction x, y, z, `t_max` (lanes past `rays` repeat the first ray).
+/// An 8 x 8 transpose: lane `j` of row `i` becomes lane `i` of row `j`.
 #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
 #[inline]
-fn transpose(rays: &[Ray]) -> [__m256; 8] {
-    let row = |i: usize| {
-        let r = rays.get(i).unwrap_or(&rays[0]);
-        let (o, d) = (r.origin, r.dir);
-        lanes8([o.x, o.y, o.z, r.t_min, d.x, d.y, d.z, r.t_max])
-    };
-    let (r0, r1, r2, r3, r4, r5, r6, r7) = (
-        row(0),
-        row(1),
-        row(2),
-        row(3),
-        row(4),
-        row(5),
-        row(6),
-        row(7),
-    );
-    let t0 = _mm256_unpacklo_ps(r0, r1);
-    let t1 = _mm256_unpackhi_ps(r0, r1);
-    let t2 = _mm256_unpacklo_ps(r2, r3);
-    let t3 = _mm256_unpackhi_ps(r2, r3);
-    let t4 = _mm256_unpacklo_ps(r4, r5);
-    let t5 = _mm256_unpackhi_ps(r4, r5);
-    let t6 = _mm256_unpacklo_ps(r6, r7);
-    let t7 = _mm256_unpackhi_ps(r6, r7);
+fn transpose8(r: [__m256; 8]) -> [__m256; 8] {
+    let t0 = _mm256_unpacklo_ps(r[0], r[1]);
+    let t1 = _mm256_unpackhi_ps(r[0], r[1]);
+    let t2 = _mm256_unpacklo_ps(r[2], r[3]);
+    let t3 = _mm256_unpackhi_ps(r[2], r[3]);
+    let t4 = _mm256_unpacklo_ps(r[4], r[5]);
+    let t5 = _mm256_unpackhi_ps(r[4], r[5]);
+    let t6 = _mm256_unpacklo_ps(r[6], r[7]);
+    let t7 = _mm256_unpackhi_ps(r[6], r[7]);
     let s0 = _mm256_shuffle_ps::<0b01_00_01_00>(t0, t2);
     let s1 = _mm256_shuffle_ps::<0b11_10_11_10>(t0, t2);
     let s2 = _mm256_shuffle_ps::<0b01_00_01_00>(t1, t3);
@@ -156,6 +140,28 @@ fn transpose(rays: &[Ray]) -> [__m256; 8] {
         _mm256_permute2f128_ps::<0x31>(s2, s6),
         _mm256_permute2f128_ps::<0x31>(s3, s7),
     ]
+}
+
+/// The eight rays' fields, lane by lane: origin x, y, z, `t_min`,
+/// direction x, y, z, `t_max` (lanes past `rays` repeat the first ray).
+#[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
+#[inline]
+fn transpose(rays: &[Ray]) -> [__m256; 8] {
+    let row = |i: usize| {
+        let r = rays.get(i).unwrap_or(&rays[0]);
+        let (o, d) = (r.origin, r.dir);
+        lanes8([o.x, o.y, o.z, r.t_min, d.x, d.y, d.z, r.t_max])
+    };
+    transpose8([
+        row(0),
+        row(1),
+        row(2),
+        row(3),
+        row(4),
+        row(5),
+        row(6),
+        row(7),
+    ])
 }
 
 impl Packet {
@@ -340,17 +346,73 @@ impl Packet {
     }
 }
 
-/// Per lane: the best hit so far of a closest-hit packet.
+/// Per lane: the best hit so far of a closest-hit packet, each field of
+/// [`Hit`] but the two indices.
 struct Lanes {
     t: __m256,
     u: __m256,
     v: __m256,
+    ng: [__m256; 3],
     /// `geom_id << 30 | prim_id`, biased by 2^31 for signed comparison
     /// (`u32::MAX` unbiased for no hit): the tie rule's order.
     key: __m256i,
-    /// The block and slot the hit came from (`block * 4 + slot`), or
-    /// `u32::MAX` when the scene's own test found it.
-    at: __m256i,
+}
+
+impl Lanes {
+    /// No hit in any lane.
+    #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
+    #[inline]
+    fn none() -> Lanes {
+        let zero = _mm256_setzero_ps();
+        Lanes {
+            t: splat(f32::INFINITY),
+            u: zero,
+            v: zero,
+            ng: [zero; 3],
+            key: _mm256_set1_epi32(-1 ^ BIAS),
+        }
+    }
+
+    /// The hits, lane `i` into `hits[i]` for the lanes of `on`; lanes of
+    /// `bad` and lanes with no hit miss ([`Hit::MISS`]). The fields are
+    /// made eight lanes at a time, then turned into hits by a transpose:
+    /// a [`Hit`] is eight words.
+    #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
+    #[inline]
+    fn write(&self, on: u32, bad: u32, hits: &mut [Hit]) {
+        let key = _mm256_xor_si256(self.key, _mm256_set1_epi32(BIAS));
+        let miss = _mm256_or_si256(
+            _mm256_cmpeq_epi32(key, _mm256_set1_epi32(-1)),
+            _mm256_castps_si256(mask_of(bad)),
+        );
+        let missf = _mm256_castsi256_ps(miss);
+        let keep = |x: __m256| _mm256_andnot_ps(missf, x);
+        let geom = _mm256_or_si256(_mm256_srli_epi32::<30>(key), miss);
+        let prim = _mm256_or_si256(_mm256_and_si256(key, _mm256_set1_epi32(!(3 << 30))), miss);
+        let rows = transpose8([
+            _mm256_blendv_ps(self.t, splat(f32::INFINITY), missf),
+            keep(self.u),
+            keep(self.v),
+            keep(self.ng[0]),
+            keep(self.ng[1]),
+            keep(self.ng[2]),
+            _mm256_castsi256_ps(geom),
+            _mm256_castsi256_ps(prim),
+        ]);
+        for (i, h) in hits.iter_mut().enumerate().take(PACKET_LANES) {
+            if on >> i & 1 != 0 {
+                let r: [f32; 8] = bytemuck::cast(rows[i]);
+                *h = Hit {
+                    t: r[0],
+                    u: r[1],
+                    v: r[2],
+                    ng: crate::Vec3::new(r[3], r[4], r[5]),
+                    geom_id: r[6].to_bits(),
+                    prim_id: r[7].to_bits(),
+                };
+            }
+        }
+    }
 }
 
 /// The bias that makes unsigned order signed.
@@ -493,6 +555,11 @@ fn walk<const ANY: bool>(
     // The entry walked now and the lanes whose rays enter its box; a
     // waiting entry takes two stack items (the entry, then its lanes).
     let (mut cur, mut lanes) = (0u32, p.on);
+    // The largest limit among the lanes of the entry walked now, or more:
+    // made when an entry is taken from the stack, kept while the walk
+    // goes down (a child's lanes are its parent's or fewer, and limits
+    // only shrink).
+    let mut reach = max_of(limits, lanes);
     let mut touch = 0u32;
     let nt = w.scene.triangles.len();
     // Each lane's ray as the scene's own tests take it, made when first
@@ -525,8 +592,7 @@ fn walk<const ANY: bool>(
                         open &= !(1 << i);
                     }
                 } else if one.hit.is_hit() {
-                    let from = one.from_block.map_or(-1, |(b, s)| (b * 4 + s) as i32);
-                    settle_lane(best, i, &one.hit, from);
+                    settle_lane(best, i, &one.finish(w));
                 }
             }
             if ANY && open == 0 {
@@ -539,7 +605,7 @@ fn walk<const ANY: bool>(
                 break;
             };
             interior += 1;
-            let (cand, tn) = p.enter(n, max_of(limits, lanes & open));
+            let (cand, tn) = p.enter(n, reach);
             let empty = _mm256_cmpeq_epi32(bytemuck::cast(n.child), _mm256_set1_epi32(-1));
             boxes += (WIDTH as u32
                 - (_mm256_movemask_ps(_mm256_castsi256_ps(empty)) as u32).count_ones())
@@ -596,7 +662,7 @@ fn walk<const ANY: bool>(
                 break;
             };
             let open_here = lanes & open;
-            for (j, b) in run.iter().enumerate() {
+            for b in run {
                 for slot in 0..4 {
                     let prim = b.prims[slot];
                     if prim == NO_PRIM {
@@ -617,7 +683,7 @@ fn walk<const ANY: bool>(
                             if ANY {
                                 open &= !(1 << i);
                             } else {
-                                settle_lane(best, i, &h, -1);
+                                settle_lane(best, i, &h);
                             }
                         }
                         if ANY {
@@ -653,8 +719,10 @@ fn walk<const ANY: bool>(
                         best.v = _mm256_blendv_ps(best.v, tuv[2], take);
                         let takei = _mm256_castps_si256(take);
                         best.key = _mm256_blendv_epi8(best.key, key, takei);
-                        let at = _mm256_set1_epi32(((first + j) * 4 + slot) as i32);
-                        best.at = _mm256_blendv_epi8(best.at, at, takei);
+                        let ng = b.normal(slot);
+                        for (a, x) in best.ng.iter_mut().zip(ng.to_array()) {
+                            *a = _mm256_blendv_ps(*a, splat(x), take);
+                        }
                         limits = _mm256_min_ps(best.t, p.t_max);
                     }
                     let edge = edge & open & open_here;
@@ -673,7 +741,7 @@ fn walk<const ANY: bool>(
                                 open &= !(1 << i);
                                 continue;
                             }
-                            settle_lane(best, i, &h, -1);
+                            settle_lane(best, i, &h);
                         }
                         if ANY {
                             if open == 0 {
@@ -691,7 +759,11 @@ fn walk<const ANY: bool>(
         while sp >= 2 {
             sp -= 2;
             let (e, l) = (stack[sp], stack[sp + 1].child & open);
-            if l != 0 && e.t <= max_of(limits, l) {
+            if l == 0 {
+                continue;
+            }
+            reach = max_of(limits, l);
+            if e.t <= reach {
                 cur = e.child;
                 lanes = l;
                 continue 'walk;
@@ -727,29 +799,28 @@ impl LaneRays {
     }
 }
 
-/// Lane `i`'s best becomes `h` when it beats it, found in block slot
-/// `from` (`block * 4 + slot`; -1 when the scene's own test found it).
+/// Lane `i`'s best becomes `h` when it beats it.
 #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
 #[inline]
-fn settle_lane(best: &mut Lanes, i: usize, h: &Hit, from: i32) {
+fn settle_lane(best: &mut Lanes, i: usize, h: &Hit) {
     let mut t: [f32; 8] = bytemuck::cast(best.t);
-    let mut u: [f32; 8] = bytemuck::cast(best.u);
-    let mut v: [f32; 8] = bytemuck::cast(best.v);
     let mut key: [i32; 8] = bytemuck::cast(best.key);
-    let mut at: [i32; 8] = bytemuck::cast(best.at);
     let hk = ((h.geom_id << 30 | h.prim_id) as i32) ^ BIAS;
-    let better = h.t < t[i] || (h.t == t[i] && hk < key[i]);
-    if better {
+    if h.t < t[i] || (h.t == t[i] && hk < key[i]) {
         t[i] = h.t;
-        u[i] = h.u;
-        v[i] = h.v;
         key[i] = hk;
-        at[i] = from;
+        let mut u: [f32; 8] = bytemuck::cast(best.u);
+        let mut v: [f32; 8] = bytemuck::cast(best.v);
+        (u[i], v[i]) = (h.u, h.v);
         best.t = bytemuck::cast(t);
         best.u = bytemuck::cast(u);
         best.v = bytemuck::cast(v);
         best.key = bytemuck::cast(key);
-        best.at = bytemuck::cast(at);
+        for (a, x) in best.ng.iter_mut().zip(h.ng.to_array()) {
+            let mut n: [f32; 8] = bytemuck::cast(*a);
+            n[i] = x;
+            *a = bytemuck::cast(n);
+        }
     }
 }
 
@@ -830,57 +901,16 @@ impl WideBvh<'_> {
             stats.faults += 1;
             return all & !valid;
         }
-        let mut best = Lanes {
-            t: splat(f32::INFINITY),
-            u: _mm256_setzero_ps(),
-            v: _mm256_setzero_ps(),
-            key: _mm256_set1_epi32(-1 ^ BIAS),
-            at: _mm256_set1_epi32(-1),
-        };
+        let mut best = Lanes::none();
         let bad = walk::<false>(self, &p, rays, &mut best, stack, stats);
         stats.rays += p.on.count_ones() as u64;
-        let t: [f32; 8] = bytemuck::cast(best.t);
-        let u: [f32; 8] = bytemuck::cast(best.u);
-        let v: [f32; 8] = bytemuck::cast(best.v);
-        let key: [i32; 8] = bytemuck::cast(best.key);
-        let at: [i32; 8] = bytemuck::cast(best.at);
-        for i in 0..rays.len() {
-            if p.on >> i & 1 == 0 {
-                continue;
-            }
-            let k = (key[i] ^ BIAS) as u32;
-            hits[i] = if k == u32::MAX || bad >> i & 1 != 0 {
-                Hit::MISS
-            } else if at[i] >= 0 {
-                let (b, slot) = (at[i] as usize / 4, at[i] as usize % 4);
-                let c = &self.blocks[b].corners;
-                let vtx = |k: usize| crate::Vec3::new(c[k][0][slot], c[k][1][slot], c[k][2][slot]);
-                Hit {
-                    t: t[i],
-                    u: u[i],
-                    v: v[i],
-                    ng: (vtx(0) - vtx(1)).cross(vtx(2) - vtx(0)),
-                    geom_id: GEOM_TRIANGLES,
-                    prim_id: k & !(3 << 30),
-                }
-            } else {
-                // The scene's own test found it: ask it again for the
-                // whole answer (the same hit, its normal included), by
-                // the primitive's global index.
-                let r = lane_ray(rays, i);
-                let (geom, id) = ((k >> 30) as usize, (k & !(3 << 30)) as usize);
-                let sc = &self.scene;
-                let first = [0, sc.triangles.len(), sc.triangles.len() + sc.spheres.len()];
-                sc.intersect_prim(first[geom.min(2)] + id, &r, t[i])
-                    .unwrap_or(Hit::MISS)
-            };
-        }
+        best.write(p.on, bad, hits);
         // Invalid rays miss; lanes left out go alone.
-        for (i, h) in hits.iter_mut().enumerate().take(rays.len()) {
-            if valid >> i & 1 == 0 {
-                *h = Hit::MISS;
-                stats.rays += 1;
-            }
+        let mut m = all & !valid;
+        while m != 0 {
+            hits[m.trailing_zeros() as usize] = Hit::MISS;
+            stats.rays += 1;
+            m &= m - 1;
         }
         valid & !p.on
     }
@@ -905,13 +935,7 @@ impl WideBvh<'_> {
             stats.faults += 1;
             return all & !valid;
         }
-        let mut unused = Lanes {
-            t: splat(f32::INFINITY),
-            u: _mm256_setzero_ps(),
-            v: _mm256_setzero_ps(),
-            key: _mm256_set1_epi32(-1),
-            at: _mm256_set1_epi32(-1),
-        };
+        let mut unused = Lanes::none();
         let occluded = walk::<true>(self, &p, rays, &mut unused, stack, stats);
         stats.rays += p.on.count_ones() as u64;
         for (i, o) in out.iter_mut().enumerate().take(rays.len()) {

@@ -111,9 +111,7 @@ impl Closest {
     /// The best hit, its normal made when a block found it.
     fn finish(mut self, w: &WideBvh) -> Hit {
         if let Some((b, slot)) = self.from_block {
-            let c = &w.blocks[b].corners;
-            let v = |k: usize| crate::Vec3::new(c[k][0][slot], c[k][1][slot], c[k][2][slot]);
-            self.best.ng = (v(0) - v(1)).cross(v(2) - v(0));
+            self.best.ng = w.blocks[b].normal(slot);
         }
         self.best
     }
