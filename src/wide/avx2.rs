@@ -103,28 +103,18 @@ fn triangles8<const ANY: bool, const OTHERS: bool, const PARALLEL: bool>(
         ),
         _mm256_cmp_ps::<_CMP_EQ_OQ>(w, zero),
     );
-    // Both signs among the three: outside. (NaN lanes, where no
-    // triangle is, compare false everywhere and fail `det == det`.)
-    let neg = _mm256_or_ps(
-        _mm256_or_ps(
-            _mm256_cmp_ps::<_CMP_LT_OQ>(u, zero),
-            _mm256_cmp_ps::<_CMP_LT_OQ>(v, zero),
-        ),
-        _mm256_cmp_ps::<_CMP_LT_OQ>(w, zero),
-    );
-    let pos = _mm256_or_ps(
-        _mm256_or_ps(
-            _mm256_cmp_ps::<_CMP_GT_OQ>(u, zero),
-            _mm256_cmp_ps::<_CMP_GT_OQ>(v, zero),
-        ),
-        _mm256_cmp_ps::<_CMP_GT_OQ>(w, zero),
-    );
     let det = _mm256_add_ps(_mm256_add_ps(u, v), w);
-    let det_ok = _mm256_and_ps(
-        _mm256_cmp_ps::<_CMP_NEQ_UQ>(det, zero),
-        _mm256_cmp_ps::<_CMP_EQ_OQ>(det, det),
+    // Inside: the three of one strict sign (no zero, so no lane of
+    // `on_edge`), whose sum `det` is then not zero. A NaN among them
+    // makes `det` NaN, which `det_ok` drops.
+    let det_ok = _mm256_cmp_ps::<_CMP_EQ_OQ>(det, det);
+    let low = _mm256_min_ps(_mm256_min_ps(u, v), w);
+    let high = _mm256_max_ps(_mm256_max_ps(u, v), w);
+    let one_sign = _mm256_or_ps(
+        _mm256_cmp_ps::<_CMP_GT_OQ>(low, zero),
+        _mm256_cmp_ps::<_CMP_LT_OQ>(high, zero),
     );
-    let inside = _mm256_andnot_ps(_mm256_or_ps(on_edge, _mm256_and_ps(neg, pos)), det_ok);
+    let inside = _mm256_and_ps(one_sign, det_ok);
     let edge = _mm256_movemask_ps(on_edge) as u32;
     if _mm256_movemask_ps(inside) == 0 {
         return Pass {
