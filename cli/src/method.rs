@@ -296,7 +296,7 @@ impl Method {
         let names: Vec<String> = Method::all().iter().map(|m| m.to_string()).collect();
         format!(
             "{}, kd-paper, kd-paper-rope, kd-paper-packet, kd-compact, kd-compact-packet, kd-c, kd-c1, kd-c1-handle, wide-packet, wide-c, wide-c1, wide-c1-handle, \
-             slcts1d:N, slcts2d:NxM, wide:N, \
+             slcts1d:N, slcts2d:NxM, wide:N, wide-packet:N, \
              and proj-BUILDER-CRITERIA-SCHEME (BUILDER {}, CRITERIA 2d|dummy, SCHEME 2d|3d|comb)",
             names.join(", "),
             PROJ_BUILDERS.join("|")
@@ -345,11 +345,17 @@ impl Method {
         if let Some(n) = s.strip_prefix("slcts1d:") {
             return cast(Scheme::Slcts1d { n: window(n)? });
         }
+        let leaf_size = |n: &str| n.parse::<u32>().ok().filter(|&n| (1..=64).contains(&n));
         if let Some(n) = s.strip_prefix("wide:") {
-            let leaf_size = n.parse::<u32>().ok().filter(|&n| (1..=64).contains(&n))?;
             return Some(Method::Wide {
-                leaf_size,
+                leaf_size: leaf_size(n)?,
                 packets: false,
+            });
+        }
+        if let Some(n) = s.strip_prefix("wide-packet:") {
+            return Some(Method::Wide {
+                leaf_size: leaf_size(n)?,
+                packets: true,
             });
         }
         if let Some(nm) = s.strip_prefix("slcts2d:") {
@@ -497,6 +503,10 @@ mod tests {
             leaf_size: 8,
             packets: false,
         });
+        all.push(Method::Wide {
+            leaf_size: 4,
+            packets: true,
+        });
         for m in [
             "kd-paper",
             "kd-paper-rope",
@@ -533,6 +543,8 @@ mod tests {
             "wide:0",
             "wide:65",
             "wide:",
+            "wide-packet:0",
+            "wide-packet:",
             "wide-c2",
             "kd-c1-",
             "hlcts2d:4x4",
