@@ -1136,7 +1136,10 @@ fn wide_statuses() {
         );
         let mut info = coray_wide_info_default();
         assert_eq!(coray_wide_info(&h, &mut info), CorayStatus::Ok);
-        assert_eq!((info.ref_count, info.node_count, info.leaf_size), (2, 1, 4));
+        assert_eq!(
+            (info.ref_count, info.node_count, info.leaf_size),
+            (2, 1, p.leaf_size)
+        );
         let mut shape = coray_shape_default();
         assert_eq!(coray_wide_validate(&h, &mut shape), CorayStatus::Ok);
         // The tree is a prefix of the arena: those bytes alone open, and
