@@ -765,9 +765,10 @@ unsafe fn batch<O>(
         let mut st = TraceStats::default();
         for (r, o) in rays.iter().zip(out.iter_mut()) {
             *o = answer(&b, &r.into(), stk, &mut st);
-        }
-        if st.faults > 0 {
-            return Err(CorayStatus::CorruptArena);
+            // A corrupt arena: the call stops at the first ray that met it.
+            if st.faults > 0 {
+                return Err(CorayStatus::CorruptArena);
+            }
         }
         stats.write(CorayTraceStats::of(&st));
         Ok(())

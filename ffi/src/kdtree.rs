@@ -733,10 +733,12 @@ unsafe fn batch<O>(
                 stk,
                 &mut st,
             )?;
+            // A corrupt arena: the call stops at the first group that
+            // met it.
+            if st.faults > 0 {
+                return Err(CorayStatus::CorruptArena);
+            }
             first = end;
-        }
-        if st.faults > 0 {
-            return Err(CorayStatus::CorruptArena);
         }
         stats.write(CorayTraceStats::of(&st));
         Ok(())

@@ -735,9 +735,10 @@ unsafe fn batch<O>(
         for (r, o) in rays.iter().zip(out.iter_mut()) {
             // Every ray was checked: a refusal here would be a defect.
             *o = answer(&p, &r.into(), s, stk, &mut st).ok_or(CorayStatus::InternalError)?;
-        }
-        if st.faults > 0 {
-            return Err(CorayStatus::CorruptArena);
+            // A corrupt arena: the call stops at the first ray that met it.
+            if st.faults > 0 {
+                return Err(CorayStatus::CorruptArena);
+            }
         }
         stats.write(CorayTraceStats::of(&st));
         Ok(())

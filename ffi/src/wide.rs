@@ -438,9 +438,11 @@ unsafe fn batch<O>(
         let rays = crate::abi::core_rays(rays);
         for (r, o) in rays.chunks(CHUNK).zip(out.chunks_mut(CHUNK)) {
             answer(&w, r, o, stk, &mut st);
-        }
-        if st.faults > 0 {
-            return Err(CorayStatus::CorruptArena);
+            // A corrupt arena: the call stops at the first group that
+            // met it.
+            if st.faults > 0 {
+                return Err(CorayStatus::CorruptArena);
+            }
         }
         stats.write(CorayTraceStats::of(&st));
         Ok(())

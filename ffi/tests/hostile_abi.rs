@@ -50,7 +50,10 @@ fn kd(s: &CorayScene) -> (Vec<Block>, CorayKdTree) {
     };
     let mut r = requirements();
     unsafe {
-        assert_eq!(coray_kdtree_requirements(2, &p, &mut r), CorayStatus::Ok);
+        assert_eq!(
+            coray_kdtree_requirements(s.triangle_count, &p, &mut r),
+            CorayStatus::Ok
+        );
         let mut t = arena(r.arena_bytes);
         let mut sc = arena(r.scratch_bytes);
         assert_eq!(
@@ -79,7 +82,10 @@ fn wide(s: &CorayScene) -> (Vec<Block>, CorayWide) {
     let p = coray_wide_params_default();
     let mut r = requirements();
     unsafe {
-        assert_eq!(coray_wide_requirements(2, &p, &mut r), CorayStatus::Ok);
+        assert_eq!(
+            coray_wide_requirements(s.triangle_count, &p, &mut r),
+            CorayStatus::Ok
+        );
         let mut a = arena(r.arena_bytes);
         let mut sc = arena(r.scratch_bytes);
         assert_eq!(
@@ -108,7 +114,10 @@ fn bvh(s: &CorayScene) -> (Vec<Block>, CorayBvh) {
     let p = coray_bvh_params_default(CORAY_BVH_BUILDER_TDBS);
     let mut r = requirements();
     unsafe {
-        assert_eq!(coray_bvh_requirements(2, &p, &mut r), CorayStatus::Ok);
+        assert_eq!(
+            coray_bvh_requirements(s.triangle_count, &p, &mut r),
+            CorayStatus::Ok
+        );
         let mut a = arena(r.arena_bytes);
         let mut sc = arena(r.scratch_bytes);
         let null = core::ptr::null_mut();
@@ -142,7 +151,10 @@ fn proj(s: &CorayScene) -> (Vec<Block>, CorayProj) {
         );
         let p = coray_proj_params_default(CORAY_PROJ_CRITERIA_2D, CORAY_BVH_BUILDER_NN_CHAIN);
         let mut r = requirements();
-        assert_eq!(coray_proj_requirements(2, &p, &mut r), CorayStatus::Ok);
+        assert_eq!(
+            coray_proj_requirements(s.triangle_count, &p, &mut r),
+            CorayStatus::Ok
+        );
         let mut a = arena(r.arena_bytes);
         let mut sc = arena(r.scratch_bytes);
         let null = core::ptr::null_mut();
@@ -1870,4 +1882,166 @@ fn a_tracers_totals_wrap_whatever_they_hold() {
     // u64::MAX and the call's one ray: 0.
     assert_eq!(st.rays, 0);
     assert!(st.traversal_steps < 64, "{}", st.traversal_steps);
+}
+
+/// An array call over a corrupt arena stops at the first group of rays
+/// that meets the damage (a packet's eight for the kd-tree, a chunk of 64
+/// for the wide hierarchy, one ray for the others): the rest of `hits`
+/// stays as it was. It traced every ray first, each until its walk's
+/// budget ran out. The damage: everything after the arena's first `k`
+/// bytes overwritten (0xff, zero, or words drawn among small indices and
+/// far coordinates), for the first `k` at which the arena still opens and
+/// the call reports it corrupt.
+#[test]
+fn array_calls_stop_at_the_first_fault() {
+    // The floor cut into 16 x 16 squares: hierarchies with interior nodes.
+    let n = 16u32;
+    let mut f = Floor {
+        vertices: Vec::new(),
+        indices: Vec::new(),
+    };
+    for j in 0..=n {
+        for i in 0..=n {
+            let (x, z) = (i as f32 / n as f32, j as f32 / n as f32);
+            f.vertices.extend([10.0 * x - 5.0, 0.0, 10.0 * z - 5.0]);
+        }
+    }
+    for j in 0..n {
+        for i in 0..n {
+            let v = j * (n + 1) + i;
+            f.indices
+                .extend([v, v + 1, v + n + 2, v, v + n + 2, v + n + 1]);
+        }
+    }
+    let mut s = scene(&f);
+    s.vertex_count = f.vertices.len() / 3;
+    s.triangle_count = f.indices.len() / 3;
+    let rays = vec![down(); 1000];
+    // The projection hierarchy takes rays from its camera's eye.
+    let c = camera();
+    let eye_rays = vec![
+        CorayRay {
+            org: c.from,
+            tnear: 0.0,
+            dir: [0.0, -1.0, 1.0],
+            tfar: f32::INFINITY,
+        };
+        1000
+    ];
+    let sentinel = CorayHit {
+        t: -1.0,
+        ..Default::default()
+    };
+    let mut stack = arena(1 << 20);
+    let (stk, stk_bytes) = (stack.as_mut_ptr().cast::<c_void>(), 1usize << 20);
+    let null = core::ptr::null_mut();
+    // (family, arena, most rays a call may answer before it stops, call)
+    type Call<'a> = Box<dyn Fn(&[Block], &mut [CorayHit]) -> Option<CorayStatus> + 'a>;
+    let (kd_a, _) = kd(&s);
+    let (wide_a, _) = wide(&s);
+    let (bvh_a, _) = bvh(&s);
+    let (proj_a, _) = proj(&s);
+    let families: Vec<(&str, Vec<Block>, usize, Call)> = vec![
+        (
+            "kd",
+            kd_a,
+            8,
+            Box::new(|a: &[Block], hits: &mut [CorayHit]| unsafe {
+                let mut h = CorayKdTree { opaque: [0; 32] };
+                let bytes = a.len() * 16;
+                (coray_kdtree_open(a.as_ptr().cast(), bytes, &s, &mut h) == CorayStatus::Ok).then(
+                    || {
+                        let t = CORAY_TRAVERSAL_HIERARCHICAL;
+                        let (r, n) = (rays.as_ptr(), rays.len());
+                        coray_kdtree_intersect(&h, t, r, hits.as_mut_ptr(), n, stk, stk_bytes, null)
+                    },
+                )
+            }),
+        ),
+        (
+            "wide",
+            wide_a,
+            64,
+            Box::new(|a: &[Block], hits: &mut [CorayHit]| unsafe {
+                let mut h = CorayWide { opaque: [0; 32] };
+                let bytes = a.len() * 16;
+                (coray_wide_open(a.as_ptr().cast(), bytes, &s, &mut h) == CorayStatus::Ok).then(
+                    || {
+                        let (r, n) = (rays.as_ptr(), rays.len());
+                        coray_wide_intersect(&h, r, hits.as_mut_ptr(), n, stk, stk_bytes, null)
+                    },
+                )
+            }),
+        ),
+        (
+            "bvh",
+            bvh_a,
+            1,
+            Box::new(|a: &[Block], hits: &mut [CorayHit]| unsafe {
+                let mut h = CorayBvh { opaque: [0; 32] };
+                let bytes = a.len() * 16;
+                (coray_bvh_open(a.as_ptr().cast(), bytes, &s, &mut h) == CorayStatus::Ok).then(
+                    || {
+                        let (r, n) = (rays.as_ptr(), rays.len());
+                        coray_bvh_intersect(&h, r, hits.as_mut_ptr(), n, stk, stk_bytes, null)
+                    },
+                )
+            }),
+        ),
+        (
+            "proj",
+            proj_a,
+            1,
+            Box::new(|a: &[Block], hits: &mut [CorayHit]| unsafe {
+                let mut h = CorayProj { opaque: [0; 32] };
+                let bytes = a.len() * 16;
+                (coray_proj_open(a.as_ptr().cast(), bytes, &s, &mut h) == CorayStatus::Ok).then(
+                    || {
+                        let (r, n) = (eye_rays.as_ptr(), eye_rays.len());
+                        let sch = CORAY_PROJ_SCHEME_2D;
+                        coray_proj_intersect(&h, sch, r, hits.as_mut_ptr(), n, stk, stk_bytes, null)
+                    },
+                )
+            }),
+        ),
+    ];
+    for (what, clean, most, call) in &families {
+        let mut hits = vec![sentinel; rays.len()];
+        assert_eq!(call(clean, &mut hits), Some(CorayStatus::Ok), "{what}");
+        let mut stopped = false;
+        for (k, fill) in (1..clean.len()).flat_map(|k| (0..10u64).map(move |f| (k, f))) {
+            // Fills 0 and 1: every byte 0xff, every byte 0; the others
+            // words drawn by a generator seeded by the fill among small
+            // indices and coordinates far out (boxes that hold everything).
+            let mut bad = clean.clone();
+            let mut x = fill.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1;
+            let words = [0, 1, 2, 3, (-1e30f32).to_bits(), 1e30f32.to_bits()];
+            for b in &mut bad[k..] {
+                let w: [u32; 4] = core::array::from_fn(|_| {
+                    x ^= x << 13;
+                    x ^= x >> 7;
+                    x ^= x << 17;
+                    words[(x % 6) as usize]
+                });
+                *b = match fill {
+                    0 => Block([0xff; 16]),
+                    1 => Block([0; 16]),
+                    _ => Block(core::array::from_fn(|i| w[i / 4].to_le_bytes()[i % 4])),
+                };
+            }
+            let mut hits = vec![sentinel; rays.len()];
+            if call(&bad, &mut hits) != Some(CorayStatus::CorruptArena) {
+                continue;
+            }
+            let written = hits.iter().filter(|h| h.t != -1.0).count();
+            assert!(
+                written <= *most,
+                "{what}, damage from byte {}: {written} hits written",
+                16 * k
+            );
+            stopped = true;
+            break;
+        }
+        assert!(stopped, "{what}: no damage made the call fault");
+    }
 }

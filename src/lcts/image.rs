@@ -412,6 +412,9 @@ pub fn cast_rect_with_by<K: Kernel>(
                     for (&(x, y), hit) in pixels[..n].iter().zip(&hits[..n]) {
                         put(x, y, hit);
                     }
+                    if st.trace.faults > 0 {
+                        return Ok(st);
+                    }
                 }
             }
         }
@@ -423,6 +426,9 @@ pub fn cast_rect_with_by<K: Kernel>(
                     let hit =
                         tree.intersect(&ray(x, y), Traversal::Hierarchical, stack, &mut st.trace);
                     put(x, y, &hit);
+                    if st.trace.faults > 0 {
+                        return Ok(st);
+                    }
                 }
             }
         }
@@ -431,6 +437,9 @@ pub fn cast_rect_with_by<K: Kernel>(
                 for x in 0..w {
                     let hit = tree.intersect(&ray(x, y), Traversal::Ropes, stack, &mut st.trace);
                     put(x, y, &hit);
+                    if st.trace.faults > 0 {
+                        return Ok(st);
+                    }
                 }
             }
         }
@@ -501,6 +510,9 @@ pub fn cast_rect_with_by<K: Kernel>(
                     let mut hist = History::new(buf);
                     trace_recorded_on(tree, &ray(xi, yj), &mut hist, stack, &mut st.trace, false);
                     put(xi, yj, &hist.hit);
+                    if st.trace.faults > 0 {
+                        return Ok(st);
+                    }
                     hist_lens_bottom.info[i] = CornerInfo {
                         len: hist.len as u32,
                         overflow: hist.overflow as u32,
@@ -531,6 +543,9 @@ pub fn cast_rect_with_by<K: Kernel>(
                             batch.push(x, yj, ray(x, yj), nearest, stack, &mut st.trace, &mut put);
                         }
                         batch.flush(stack, &mut st.trace, &mut put);
+                        if st.trace.faults > 0 {
+                            return Ok(st);
+                        }
                     }
                 } else if j > 0 {
                     let y_prev = corners(h, m, j - 1);
@@ -584,6 +599,9 @@ pub fn cast_rect_with_by<K: Kernel>(
                             }
                         }
                         batch.flush(stack, &mut st.trace, &mut put);
+                        if st.trace.faults > 0 {
+                            return Ok(st);
+                        }
                     }
                 }
                 if m > 1 {
@@ -912,6 +930,10 @@ impl<K: Kernel, F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, K, F> {
         free: Free,
     ) {
         let [x0, y0, x1, y1] = rect;
+        if self.st.trace.faults > 0 {
+            // A corrupt tree: the cast stops at its first fault.
+            return;
+        }
         if self
             .screen
             .as_ref()
@@ -1203,6 +1225,9 @@ fn cast_bisection<K: Kernel>(
             );
             (b.put)(x, yy, &hist.hit);
             infos[j] = (hist.len, hist.overflow, hist.hit);
+            if b.st.trace.faults > 0 {
+                return Ok(b.st);
+            }
         }
         {
             let corner_recs: &[HistoryRecord] = corner_recs;
@@ -1229,6 +1254,9 @@ fn cast_bisection<K: Kernel>(
             if k > 1 {
                 b.shaft(rect, &corners[..k], &root, 0, free);
             }
+        }
+        if b.st.trace.faults > 0 {
+            break;
         }
     }
     Ok(b.st)
