@@ -177,6 +177,9 @@ mod tests {
             super::CORAY_VERSION_PATCH
         );
         assert_eq!(v, want);
-        assert_eq!(super::coray_version(), 1 << 16 | 6 << 8);
+        let packed = super::CORAY_VERSION_MAJOR << 16
+            | super::CORAY_VERSION_MINOR << 8
+            | super::CORAY_VERSION_PATCH;
+        assert_eq!(super::coray_version(), packed);
     }
 }
