@@ -1086,9 +1086,11 @@ enum CorayStatus coray_kdtree_open(const void *arena,
 enum CorayStatus coray_kdtree_info(const struct CorayKdTree *tree, struct CorayKdTreeInfo *out);
 
 // Checks every structural invariant of the tree against its scene, in
-// time linear in the tree, never crashing on any bytes:
-// `CORAY_STATUS_CORRUPT_ARENA` when anything is wrong. Once it accepts an
-// arena, every call on it gives the results of a clean build. `stack` is
+// time linear in the tree and the scene, never crashing on any bytes:
+// `CORAY_STATUS_CORRUPT_ARENA` when anything is wrong, the scene changed
+// since the build among it (a digest of every scene word is recorded at
+// build time; since 1.7). Once it accepts an arena, every call on it
+// gives the results of a clean build. `stack` is
 // unused by kd-trees (it may be NULL); `out` may be NULL.
 //
 // Safety: as `coray_kdtree_info`.

@@ -62,7 +62,7 @@ const _: () = {
     assert!(size_of::<KdRopes>() == 48);
     assert!(size_of::<KdEvent>() == 8 && align_of::<KdEvent>() <= ARENA_ALIGN);
     assert!(size_of::<KdStackItem>() == 8 && align_of::<KdStackItem>() == 4);
-    assert!(size_of::<layout::KdArenaHeader>() == 116);
+    assert!(size_of::<layout::KdArenaHeader>() == 124);
     assert!(size_of::<coray::Sphere>() == 16 && align_of::<coray::Sphere>() == 4);
     assert!(size_of::<coray::Cone>() == 32 && align_of::<coray::Cone>() == 4);
     assert!(size_of::<coray::lcts::HistoryRecord>() == 8);

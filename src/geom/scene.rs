@@ -32,6 +32,48 @@ pub struct Scene<'a> {
 }
 
 impl<'a> Scene<'a> {
+    /// The digest of the scene's contents: every word of its vertices,
+    /// triangles, spheres and cones, in order, and the arrays' lengths.
+    /// A kd-tree records it at build time and `validate` recomputes it, so
+    /// a tree over a scene changed since (one vertex bit, one index) is
+    /// refused: its leaves may miss what the change moved into their cells.
+    /// Each word enters by a bijection of the running state, so any one
+    /// changed word changes the digest; more changes collide with
+    /// probability about 2^-64 (not a crafted scene). About a nanosecond
+    /// a word: 12 ms for `random:1000000`'s 12 million.
+    pub fn digest(&self) -> u64 {
+        let mut d = 0x5343_454E_4544_4947u64; // "SCENEDIG"
+        let mut step = |w: u64| d = (d.rotate_left(23) ^ w).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        let pair = |a: f32, b: f32| (a.to_bits() as u64) << 32 | b.to_bits() as u64;
+        for v in self.vertices {
+            step(pair(v[0], v[1]));
+            step(v[2].to_bits() as u64);
+        }
+        for t in self.triangles {
+            step((t[0] as u64) << 32 | t[1] as u64);
+            step(t[2] as u64);
+        }
+        for s in self.spheres {
+            step(pair(s.center[0], s.center[1]));
+            step(pair(s.center[2], s.radius));
+        }
+        for c in self.cones {
+            step(pair(c.base[0], c.base[1]));
+            step(pair(c.base[2], c.base_radius));
+            step(pair(c.apex[0], c.apex[1]));
+            step(pair(c.apex[2], c.apex_radius));
+        }
+        for len in [
+            self.vertices.len(),
+            self.triangles.len(),
+            self.spheres.len(),
+            self.cones.len(),
+        ] {
+            step(len as u64);
+        }
+        crate::rng::mix64(d)
+    }
+
     /// Number of primitives of all kinds.
     #[inline]
     pub fn prim_count(&self) -> usize {

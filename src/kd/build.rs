@@ -443,6 +443,10 @@ impl Made {
                 let d = crate::rng::node_digest(nodes.iter().map(|n| (n.word, n.data)));
                 [d as u32, (d >> 32) as u32]
             },
+            scene_digest: {
+                let d = scene.digest();
+                [d as u32, (d >> 32) as u32]
+            },
         };
         KdTree {
             scene: *scene,

@@ -254,7 +254,7 @@ impl KdRopes {
 /// Magic word of a kd-tree's [`KdInfo`]: "CRKD".
 pub const KD_MAGIC: u32 = u32::from_le_bytes(*b"CRKD");
 /// Layout version of [`KdInfo`] and the node types.
-pub const KD_VERSION: u32 = 6;
+pub const KD_VERSION: u32 = 7;
 
 /// Flag in [`KdInfo::flags`]: a capacity stopped splitting somewhere.
 pub const KD_FLAG_TRUNCATED: u32 = 1;
@@ -303,6 +303,9 @@ pub struct KdInfo {
     pub ref_digest: [u32; 2],
     /// [`crate::rng::node_digest`] of the nodes, low and high words.
     pub node_digest: [u32; 2],
+    /// [`Scene::digest`](crate::Scene::digest) of the scene built on, low
+    /// and high words.
+    pub scene_digest: [u32; 2],
 }
 
 impl KdInfo {
@@ -314,6 +317,11 @@ impl KdInfo {
     /// The recorded node digest.
     pub fn node_digest(&self) -> u64 {
         self.node_digest[0] as u64 | (self.node_digest[1] as u64) << 32
+    }
+
+    /// The recorded scene digest.
+    pub fn scene_digest(&self) -> u64 {
+        self.scene_digest[0] as u64 | (self.scene_digest[1] as u64) << 32
     }
 
     /// Root box.

@@ -222,6 +222,11 @@ impl<'a> KdTree<'a> {
         if nodes != info.node_digest() {
             return Err(corrupt("node digest"));
         }
+        // The scene is the one built on: a vertex or an index changed since
+        // may put a primitive into cells whose leaves do not name it.
+        if self.scene.digest() != info.scene_digest() {
+            return Err(corrupt("scene digest"));
+        }
         // The nodes form one tree of the recorded depth, every leaf's box
         // is the one its splits imply: the ropes can be walked.
         for rp in self.ropes {
