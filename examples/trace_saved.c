@@ -7,7 +7,8 @@
  *
  *   trace_saved scene.coray OUT.ppm [SIZE]
  *
- * File format: ffi/src/saved.rs (a 96-byte header, then the arrays).
+ * File format: ffi/src/saved.rs (a 128-byte header with a checksum, then
+ * the arrays); coray_saved_open reads it.
  */
 #include <fcntl.h>
 #include <math.h>
@@ -21,20 +22,6 @@
 
 #include <coray.h>
 
-static uint64_t word(const unsigned char *base, size_t at) {
-    uint64_t w;
-    memcpy(&w, base + at, sizeof w);
-    return w;
-}
-
-/* The array at header field `field` of `count` elements of `elem` bytes,
- * or NULL when it does not lie inside the file. */
-static const void *array_at(const unsigned char *base, size_t len, size_t field, uint64_t count, size_t elem) {
-    uint64_t off = word(base, field);
-    if (off > len || count > (len - off) / elem || off % 16 != 0) return NULL;
-    return base + off;
-}
-
 int main(int argc, char **argv) {
     int size = argc > 3 ? atoi(argv[3]) : 256;
     if (argc < 3 || size < 1 || size > 8192) {
@@ -43,7 +30,7 @@ int main(int argc, char **argv) {
     }
     int fd = open(argv[1], O_RDONLY);
     struct stat st;
-    if (fd < 0 || fstat(fd, &st) != 0 || (size_t)st.st_size < CORAY_SAVED_HEADER_BYTES) {
+    if (fd < 0 || fstat(fd, &st) != 0 || st.st_size <= 0) {
         fprintf(stderr, "%s: cannot read\n", argv[1]);
         return 1;
     }
@@ -51,39 +38,17 @@ int main(int argc, char **argv) {
     const unsigned char *base = mmap(NULL, len, PROT_READ, MAP_SHARED, fd, 0);
     close(fd);
     if (base == MAP_FAILED) return 1;
-    uint32_t version;
-    memcpy(&version, base + 8, 4);
-    if (memcmp(base, "CORAYSV1", 8) != 0 || version != CORAY_SAVED_VERSION) {
-        fprintf(stderr, "%s: not a saved coray scene (version %d)\n", argv[1], CORAY_SAVED_VERSION);
-        return 1;
-    }
-    uint64_t nv = word(base, 16), nt = word(base, 24), ns = word(base, 32), nc = word(base, 40);
-    CorayScene scene = coray_scene_default();
-    scene.vertices = array_at(base, len, 48, nv, 12);
-    scene.vertex_count = nv;
-    scene.indices = array_at(base, len, 56, nt, 12);
-    scene.triangle_count = nt;
-    scene.spheres = array_at(base, len, 64, ns, 16);
-    scene.sphere_count = ns;
-    scene.cones = array_at(base, len, 72, nc, 32);
-    scene.cone_count = nc;
-    uint64_t arena_bytes = word(base, 88);
-    const void *arena = array_at(base, len, 80, arena_bytes, 1);
-    if ((nv && !scene.vertices) || (nt && !scene.indices) || (ns && !scene.spheres) || (nc && !scene.cones) || !arena) {
-        fprintf(stderr, "%s: an array lies outside the file\n", argv[1]);
-        return 1;
-    }
 
-    /* Open (O(1) header checks), then validate the whole tree once: the
-     * file may have been damaged on its way here. */
-    CorayKdTree tree;
-    CorayShape shape = coray_shape_default();
-    CorayStatus s = coray_kdtree_open(arena, (size_t)arena_bytes, &scene, &tree);
-    if (s == CORAY_STATUS_OK) s = coray_kdtree_validate(&tree, NULL, 0, &shape);
+    /* One call checks the file (magic, version, byte order, length, a
+     * checksum over every byte: it may have been damaged on its way here),
+     * points the scene into it and opens and validates the tree. */
+    CoraySaved saved = coray_saved_default();
+    CorayStatus s = coray_saved_open(base, len, &saved);
     if (s != CORAY_STATUS_OK) {
         fprintf(stderr, "%s: %s\n", argv[1], coray_status_str(s));
         return 1;
     }
+    const CorayKdTree tree = saved.tree;
     CorayKdTreeInfo info = coray_kdtree_info_default();
     if (coray_kdtree_info(&tree, &info) != CORAY_STATUS_OK) return 1;
 
@@ -134,7 +99,7 @@ int main(int argc, char **argv) {
     }
     fclose(out);
     printf("%s: %u nodes, %u leaves, depth %u, validated; %dx%d cast in packets, %zu pixels hit -> %s\n", argv[1],
-           shape.node_count, shape.leaf_count, shape.depth, size, size, hit_count, argv[2]);
+           info.node_count, info.leaf_count, info.depth, size, size, hit_count, argv[2]);
     free(hits);
     free(scratch);
     free(stack);

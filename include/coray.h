@@ -28,11 +28,15 @@
 // Bytes of the traversal stack every kd-tree trace and cast takes.
 #define CORAY_KDTREE_STACK_BYTES 4608
 
-// Version of the saved-scene file format (`coray build -o`).
-#define CORAY_SAVED_VERSION 1
+// Version of the saved-scene file format (`coray build -o`): 2 since 1.7
+// (the checksum, the byte order mark and the file's length).
+#define CORAY_SAVED_VERSION 2
 
 // Bytes of a saved-scene file's header; its arrays follow, 16-byte aligned.
-#define CORAY_SAVED_HEADER_BYTES 96
+#define CORAY_SAVED_HEADER_BYTES 128
+
+// The byte order mark: this word, as the writer stores words.
+#define CORAY_SAVED_BYTE_ORDER 16909060
 
 // Status of every entry point. Numbers are fixed forever; docs/c-api.md
 // says which situations give which status.
@@ -66,6 +70,9 @@ typedef enum CorayStatus {
   // The call walks ropes (an LCTS cast, a patch query) and the kd-tree
   // was built without them (`omit_ropes`). Since 1.2.
   CORAY_STATUS_NO_ROPES = 10,
+  // A saved file's magic, format version, byte order, length, checksum
+  // or array bounds are wrong (`coray_saved_open`). Since 1.7.
+  CORAY_STATUS_DAMAGED_FILE = 11,
 } CorayStatus;
 
 // The primitives, borrowed for the duration of each call (coray keeps no
@@ -541,6 +548,23 @@ typedef struct CorayProj {
 
 // How a ray is tested against the nodes: `CORAY_PROJ_SCHEME_*`.
 typedef uint32_t CorayProjScheme;
+
+// A saved file opened by `coray_saved_open`: the scene, its arrays inside
+// the file, and the kd-tree over it, opened and validated. Both borrow
+// the file's bytes: keep the file mapped, unchanged, while they are used.
+// Since 1.7.
+typedef struct CoraySaved {
+  // `sizeof(CoraySaved)`.
+  size_t struct_size;
+  // The preset the tree was built with (`CorayKdPreset`).
+  CorayKdPreset preset;
+  // Zero.
+  uint32_t reserved;
+  // The scene, its arrays pointing into the file.
+  struct CorayScene scene;
+  // The tree over `scene`, for every `coray_kdtree_*` call.
+  struct CorayKdTree tree;
+} CoraySaved;
 
 // Parameters of a wide hierarchy build. Get them from
 // `coray_wide_params_default`.
@@ -1393,6 +1417,24 @@ enum CorayStatus coray_proj_tracer_intersect1(struct CorayTracer *tracer,
 enum CorayStatus coray_proj_tracer_occluded1(struct CorayTracer *tracer,
                                              const struct CorayRay *ray,
                                              uint8_t *occluded);
+
+// A `CoraySaved` with its `struct_size` set: pass it to
+// `coray_saved_open`.
+struct CoraySaved coray_saved_default(void);
+
+// Checks a saved file (`coray build SCENE -o FILE`) mapped or read at
+// `file` (16-byte aligned, as `mmap` and `malloc` give) and opens it:
+// `out->scene` points into the file, `out->tree` is its kd-tree, opened
+// and validated over that scene. `CORAY_STATUS_DAMAGED_FILE` when the
+// magic, the format version, the byte order, the length, the checksum or
+// an array's place is wrong (nothing of the file is trusted before the
+// checksum passes); the statuses of `coray_kdtree_open` and
+// `coray_kdtree_validate` after that. Time linear in the file. Since 1.7.
+//
+// Safety: `file` is NULL or readable for `file_bytes` and stays mapped
+// and unchanged while `out` is used; `out` is NULL or writable for its
+// `struct_size`.
+enum CorayStatus coray_saved_open(const void *file, size_t file_bytes, struct CoraySaved *out);
 
 // The statistics of every successful call on `tracer` since it was made,
 // summed, into `stats` (its `struct_size` set). Since 1.5.

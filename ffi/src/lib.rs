@@ -29,7 +29,6 @@ mod handle;
 mod kdtree;
 mod one_ray;
 mod proj;
-#[cfg(feature = "std")]
 pub mod saved;
 pub mod simd;
 #[cfg(feature = "std")]
@@ -44,6 +43,7 @@ pub use cast::*;
 pub use handle::{CorayBvh, CorayKdTree, CorayProj, CorayWide};
 pub use kdtree::*;
 pub use proj::*;
+pub use saved::{coray_saved_default, coray_saved_open, CoraySaved};
 pub use tracer::*;
 pub use wide::*;
 
@@ -88,6 +88,9 @@ pub enum CorayStatus {
     /// The call walks ropes (an LCTS cast, a patch query) and the kd-tree
     /// was built without them (`omit_ropes`). Since 1.2.
     NoRopes = 10,
+    /// A saved file's magic, format version, byte order, length, checksum
+    /// or array bounds are wrong (`coray_saved_open`). Since 1.7.
+    DamagedFile = 11,
 }
 
 impl From<coray::Error> for CorayStatus {
@@ -142,6 +145,7 @@ pub fn status_description(status: i32) -> &'static core::ffi::CStr {
         8 => c"scene differs from the one the arena was built on",
         9 => c"internal error (a bug in coray)",
         10 => c"the kd-tree has no ropes (built with omit_ropes)",
+        11 => c"damaged saved file (magic, version, byte order, length, checksum or bounds)",
         _ => c"unknown status",
     }
 }

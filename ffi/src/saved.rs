@@ -2,40 +2,244 @@
 //! process (`coray build SCENE -o scene.coray`; `examples/trace_saved.c`
 //! maps it and traces). The arena is the C ABI's, byte for byte: it holds
 //! offsets, not pointers, so it opens at whatever address the file is
-//! mapped. Native byte order; little-endian targets read each other's files.
+//! mapped. `coray_saved_open` checks a file and opens it; the writer
+//! (`kdtree_file`) needs `std`.
 //!
-//! Layout (all offsets from the file's start, every array 16-byte aligned):
+//! Layout, format version 2 (all offsets from the file's start, every
+//! array 16-byte aligned, every word in the writer's byte order):
 //!
 //! | bytes | field |
 //! |---|---|
 //! | 0..8 | magic `CORAYSV1` |
-//! | 8..12 | format version (1), `uint32_t` |
-//! | 12..16 | the kd-tree's preset (`CorayKdPreset`) |
-//! | 16..48 | vertex, triangle, sphere and cone counts, `uint64_t` each |
-//! | 48..80 | offsets of vertices (3 floats each), triangle indices (3 `uint32_t`), spheres (4 floats), cones (8 floats), `uint64_t` each |
-//! | 80..96 | offset and bytes of the kd-tree arena, `uint64_t` each |
+//! | 8..12 | format version (2), `uint32_t` |
+//! | 12..16 | byte order mark `0x01020304`, `uint32_t` |
+//! | 16..20 | the kd-tree's preset (`CorayKdPreset`) |
+//! | 20..24 | zero |
+//! | 24..32 | checksum: XXH3-64 of the whole file with these 8 bytes zero |
+//! | 32..64 | vertex, triangle, sphere and cone counts, `uint64_t` each |
+//! | 64..96 | offsets of vertices (3 floats each), triangle indices (3 `uint32_t`), spheres (4 floats), cones (8 floats), `uint64_t` each |
+//! | 96..112 | offset and bytes of the kd-tree arena, `uint64_t` each |
+//! | 112..120 | the file's bytes, `uint64_t` |
+//! | 120..128 | zero |
 //!
-//! The reader checks the magic, the version, that every array lies inside
-//! the file, then hands the arena to `coray_kdtree_open` and
-//! `coray_kdtree_validate`: a damaged file is refused, never traced.
+//! `coray_saved_open` refuses with `CORAY_STATUS_DAMAGED_FILE` a file whose
+//! magic, version, byte order, length, checksum or array bounds are wrong:
+//! any damage on the way (one flipped bit anywhere) is caught by the
+//! checksum before a word of the scene or the tree is trusted. It then
+//! opens and validates the tree over the file's scene: a file written
+//! with a tree that does not fit its scene is `CORAY_STATUS_CORRUPT_ARENA`.
+//! Version 1 files (no checksum) are refused: build them again.
 
 use crate::*;
-use coray::Scene;
-use std::vec::Vec;
+use core::ffi::c_void;
+use xxhash_rust::xxh3::Xxh3;
 
 /// The file's first eight bytes: `CORAYSV1`.
 pub const SAVED_MAGIC: [u8; 8] = *b"CORAYSV1";
-/// Version of the saved-scene file format (`coray build -o`).
-pub const CORAY_SAVED_VERSION: u32 = 1;
+/// Version of the saved-scene file format (`coray build -o`): 2 since 1.7
+/// (the checksum, the byte order mark and the file's length).
+pub const CORAY_SAVED_VERSION: u32 = 2;
 /// Bytes of a saved-scene file's header; its arrays follow, 16-byte aligned.
-pub const CORAY_SAVED_HEADER_BYTES: usize = 96;
+pub const CORAY_SAVED_HEADER_BYTES: usize = 128;
+/// The byte order mark: this word, as the writer stores words.
+pub const CORAY_SAVED_BYTE_ORDER: u32 = 0x0102_0304;
 
+/// Where the header keeps its checksum.
+const CHECKSUM_AT: usize = 24;
+
+/// A saved file opened by `coray_saved_open`: the scene, its arrays inside
+/// the file, and the kd-tree over it, opened and validated. Both borrow
+/// the file's bytes: keep the file mapped, unchanged, while they are used.
+/// Since 1.7.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct CoraySaved {
+    /// `sizeof(CoraySaved)`.
+    pub struct_size: usize,
+    /// The preset the tree was built with (`CorayKdPreset`).
+    pub preset: CorayKdPreset,
+    /// Zero.
+    pub reserved: u32,
+    /// The scene, its arrays pointing into the file.
+    pub scene: CorayScene,
+    /// The tree over `scene`, for every `coray_kdtree_*` call.
+    pub tree: CorayKdTree,
+}
+
+impl Default for CoraySaved {
+    fn default() -> Self {
+        CoraySaved {
+            struct_size: core::mem::size_of::<CoraySaved>(),
+            preset: 0,
+            reserved: 0,
+            scene: coray_scene_default(),
+            tree: CorayKdTree { opaque: [0; 32] },
+        }
+    }
+}
+
+// SAFETY: repr(C) of usize, u32, a Versioned struct of pointers and
+// sizes, and u64 words: every bit pattern valid, `struct_size` first, no
+// padding (8-byte fields after two u32).
+unsafe impl carve::Versioned for CoraySaved {
+    const SIZE_1_0: usize = core::mem::size_of::<Self>();
+}
+
+/// A `CoraySaved` with its `struct_size` set: pass it to
+/// `coray_saved_open`.
+#[no_mangle]
+pub extern "C" fn coray_saved_default() -> CoraySaved {
+    CoraySaved::default()
+}
+
+/// XXH3-64 of `file` (a whole saved file, at least its header) with its
+/// checksum field read as zero: what bytes 24..32 hold.
+pub fn checksum(file: &[u8]) -> u64 {
+    let mut h = Xxh3::new();
+    h.update(&file[..CHECKSUM_AT]);
+    h.update(&[0; 8]);
+    h.update(&file[CHECKSUM_AT + 8..]);
+    h.digest()
+}
+
+/// The header's `k`-th 64-bit word (bytes `8 * k..8 * k + 8`).
+fn word(file: &[u8], k: usize) -> u64 {
+    let mut w = [0; 8];
+    w.copy_from_slice(&file[8 * k..8 * k + 8]);
+    u64::from_ne_bytes(w)
+}
+
+/// The header's 32-bit word at byte `at`.
+fn word32(file: &[u8], at: usize) -> u32 {
+    let mut w = [0; 4];
+    w.copy_from_slice(&file[at..at + 4]);
+    u32::from_ne_bytes(w)
+}
+
+/// What a sound file's header says: the preset, per array (vertices,
+/// triangles, spheres, cones, arena) its offset, element count and
+/// element bytes.
+struct Parts {
+    preset: CorayKdPreset,
+    arrays: [(usize, usize, usize); 5],
+}
+
+/// Checks everything of `file` but the tree: magic, version, byte order,
+/// length, checksum, every array inside the file and 16-byte aligned.
+fn parts(file: &[u8]) -> Result<Parts, CorayStatus> {
+    let damaged = Err(CorayStatus::DamagedFile);
+    if file.len() < CORAY_SAVED_HEADER_BYTES || file[..8] != SAVED_MAGIC {
+        return damaged;
+    }
+    if word32(file, 8) != CORAY_SAVED_VERSION || word32(file, 12) != CORAY_SAVED_BYTE_ORDER {
+        return damaged;
+    }
+    if word(file, 14) != file.len() as u64 || checksum(file) != word(file, 3) {
+        return damaged;
+    }
+    let elem: [u64; 5] = [12, 12, 16, 32, 1];
+    let mut arrays = [(0, 0, 0); 5];
+    for (k, a) in arrays.iter_mut().enumerate() {
+        let count = if k < 4 {
+            word(file, 4 + k)
+        } else {
+            word(file, 13)
+        };
+        let offset = word(file, 8 + k.min(4));
+        let fits = offset.is_multiple_of(16)
+            && offset >= CORAY_SAVED_HEADER_BYTES as u64
+            && offset <= file.len() as u64
+            && count <= (file.len() as u64 - offset) / elem[k];
+        if !fits {
+            return damaged;
+        }
+        *a = (offset as usize, count as usize, elem[k] as usize);
+    }
+    Ok(Parts {
+        preset: word32(file, 16),
+        arrays,
+    })
+}
+
+/// Checks a saved file (`coray build SCENE -o FILE`) mapped or read at
+/// `file` (16-byte aligned, as `mmap` and `malloc` give) and opens it:
+/// `out->scene` points into the file, `out->tree` is its kd-tree, opened
+/// and validated over that scene. `CORAY_STATUS_DAMAGED_FILE` when the
+/// magic, the format version, the byte order, the length, the checksum or
+/// an array's place is wrong (nothing of the file is trusted before the
+/// checksum passes); the statuses of `coray_kdtree_open` and
+/// `coray_kdtree_validate` after that. Time linear in the file. Since 1.7.
+///
+/// Safety: `file` is NULL or readable for `file_bytes` and stays mapped
+/// and unchanged while `out` is used; `out` is NULL or writable for its
+/// `struct_size`.
+#[no_mangle]
+pub unsafe extern "C" fn coray_saved_open(
+    file: *const c_void,
+    file_bytes: usize,
+    out: *mut CoraySaved,
+) -> CorayStatus {
+    guard(|| {
+        let mut regions = carve::Regions::new();
+        let base = file.cast::<u8>();
+        carve::check_arena(base)?;
+        // SAFETY: forwarded caller contract: out NULL or writable.
+        let out = unsafe { carve::Out::new(out, false, &mut regions)? };
+        regions.add(base, file_bytes, false).check()?;
+        // SAFETY: non-null, aligned, readable for file_bytes (caller).
+        let bytes = unsafe { core::slice::from_raw_parts(base, file_bytes) };
+        let p = parts(bytes)?;
+        let at = |k: usize| {
+            let (offset, count, _) = p.arrays[k];
+            // An empty array may be NULL; a present one lies in the file.
+            // SAFETY: offset + count * elem <= file_bytes (checked).
+            (count > 0).then(|| unsafe { base.add(offset) })
+        };
+        let mut scene = coray_scene_default();
+        scene.vertices = at(0).map_or(core::ptr::null(), |q| q.cast());
+        scene.vertex_count = p.arrays[0].1;
+        scene.indices = at(1).map_or(core::ptr::null(), |q| q.cast());
+        scene.triangle_count = p.arrays[1].1;
+        scene.spheres = at(2).map_or(core::ptr::null(), |q| q.cast());
+        scene.sphere_count = p.arrays[2].1;
+        scene.cones = at(3).map_or(core::ptr::null(), |q| q.cast());
+        scene.cone_count = p.arrays[3].1;
+        let (arena_at, arena_bytes, _) = p.arrays[4];
+        // SAFETY: inside the file (checked above).
+        let arena = unsafe { base.add(arena_at) }.cast::<c_void>();
+        let mut tree = CorayKdTree { opaque: [0; 32] };
+        // SAFETY: the arena and the scene's arrays lie inside the file,
+        // readable for the call; scene and tree are live locals.
+        let s = unsafe { coray_kdtree_open(arena, arena_bytes, &scene, &mut tree) };
+        if s != CorayStatus::Ok {
+            return Err(s);
+        }
+        // SAFETY: tree was just filled by coray_kdtree_open.
+        let s = unsafe {
+            coray_kdtree_validate(&tree, core::ptr::null_mut(), 0, core::ptr::null_mut())
+        };
+        if s != CorayStatus::Ok {
+            return Err(s);
+        }
+        out.write(CoraySaved {
+            struct_size: 0,
+            preset: p.preset,
+            reserved: 0,
+            scene,
+            tree,
+        });
+        Ok(())
+    })
+}
+
+#[cfg(feature = "std")]
 fn align16(n: usize) -> usize {
     n.div_ceil(16) * 16
 }
 
 /// 16-byte aligned memory for an arena or scratch.
-pub(crate) fn aligned(bytes: usize) -> Vec<u128> {
+#[cfg(feature = "std")]
+pub(crate) fn aligned(bytes: usize) -> std::vec::Vec<u128> {
     std::vec![0u128; bytes.div_ceil(16).max(1)]
 }
 
@@ -43,11 +247,12 @@ pub(crate) fn aligned(bytes: usize) -> Vec<u128> {
 /// none, 2 none and compact: `CorayKdParams::omit_ropes`), by
 /// `coray_kdtree_build`: the arena (16-byte aligned words, cut to what the
 /// tree uses) and the bytes the tree uses (`arena_bytes_used`).
+#[cfg(feature = "std")]
 pub(crate) fn build_arena(
-    scene: &Scene,
+    scene: &coray::Scene,
     preset: CorayKdPreset,
     omit_ropes: u32,
-) -> Result<(Vec<u128>, usize), CorayStatus> {
+) -> Result<(std::vec::Vec<u128>, usize), CorayStatus> {
     let mut params = coray_kdtree_params_default(preset);
     if params.struct_size == 0 {
         return Err(CorayStatus::InvalidParameter);
@@ -101,7 +306,8 @@ pub(crate) fn build_arena(
 }
 
 /// `scene` as the C ABI's struct (pointers to its arrays).
-pub(crate) fn c_scene(scene: &Scene) -> CorayScene {
+#[cfg(feature = "std")]
+pub(crate) fn c_scene(scene: &coray::Scene) -> CorayScene {
     let mut c = coray_scene_default();
     c.vertices = scene.vertices.as_ptr().cast();
     c.vertex_count = scene.vertices.len();
@@ -117,11 +323,13 @@ pub(crate) fn c_scene(scene: &Scene) -> CorayScene {
 /// The file holding `scene` and a kd-tree built on it with `preset` and
 /// `omit_ropes`: with ropes (0: every call works on it, the casts too),
 /// without (1: smaller) or compact (2: smaller still).
+#[cfg(feature = "std")]
 pub fn kdtree_file(
-    scene: &Scene,
+    scene: &coray::Scene,
     preset: CorayKdPreset,
     omit_ropes: u32,
-) -> Result<Vec<u8>, CorayStatus> {
+) -> Result<std::vec::Vec<u8>, CorayStatus> {
+    use std::vec::Vec;
     let (arena, arena_bytes) = build_arena(scene, preset, omit_ropes)?;
     let arena: Vec<u8> = arena
         .iter()
@@ -178,8 +386,9 @@ pub fn kdtree_file(
     }
     out[0..8].copy_from_slice(&SAVED_MAGIC);
     out[8..12].copy_from_slice(&CORAY_SAVED_VERSION.to_ne_bytes());
-    out[12..16].copy_from_slice(&preset.to_ne_bytes());
-    let words: [u64; 10] = [
+    out[12..16].copy_from_slice(&CORAY_SAVED_BYTE_ORDER.to_ne_bytes());
+    out[16..20].copy_from_slice(&preset.to_ne_bytes());
+    let words: [u64; 11] = [
         parts[0].1 as u64,
         parts[1].1 as u64,
         parts[2].1 as u64,
@@ -190,9 +399,12 @@ pub fn kdtree_file(
         offsets[3],
         offsets[4],
         arena_bytes as u64,
+        out.len() as u64,
     ];
     for (k, w) in words.iter().enumerate() {
-        out[16 + 8 * k..24 + 8 * k].copy_from_slice(&w.to_ne_bytes());
+        out[32 + 8 * k..40 + 8 * k].copy_from_slice(&w.to_ne_bytes());
     }
+    let sum = checksum(&out);
+    out[CHECKSUM_AT..CHECKSUM_AT + 8].copy_from_slice(&sum.to_ne_bytes());
     Ok(out)
 }

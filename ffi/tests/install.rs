@@ -179,12 +179,21 @@ fn install_then_build_the_examples_with_pkg_config_and_cmake() {
         &[&saved, &tmp.join("saved.ppm"), Path::new("32")],
     );
     assert!(out.contains("validated"), "{out}");
-    // A damaged copy is refused, never traced: its header (open), its
-    // root node (validate).
-    let arena_at = u64::from_ne_bytes(bytes[80..88].try_into().unwrap()) as usize;
-    for at in [4, coray::kd::layout::KD_HEADER_BYTES] {
+    // A damaged copy is refused, never traced: a byte of the tree's header
+    // or of its root node (the checksum), or the root node changed and
+    // the checksum made again (validate).
+    let arena_at = u64::from_ne_bytes(bytes[96..104].try_into().unwrap()) as usize;
+    for (at, forged, says) in [
+        (4, false, "damaged"),
+        (coray::kd::layout::KD_HEADER_BYTES, false, "damaged"),
+        (coray::kd::layout::KD_HEADER_BYTES, true, "corrupt"),
+    ] {
         let mut bad = bytes.clone();
         bad[arena_at + at] ^= 0x5a;
+        if forged {
+            let sum = coray_ffi::saved::checksum(&bad);
+            bad[24..32].copy_from_slice(&sum.to_ne_bytes());
+        }
         std::fs::write(&saved, &bad).unwrap();
         let st = Command::new(build.join("trace_saved"))
             .arg(&saved)
@@ -194,7 +203,7 @@ fn install_then_build_the_examples_with_pkg_config_and_cmake() {
             .unwrap();
         let err = String::from_utf8_lossy(&st.stderr);
         assert!(!st.status.success(), "a tree damaged at {at} was traced");
-        assert!(err.contains("corrupt"), "{err}");
+        assert!(err.contains(says), "{at} {forged}: {err}");
     }
     let _ = std::fs::remove_dir_all(&tmp);
 }
