@@ -22,7 +22,17 @@
 //! The first byte picks the family (kd-tree, hierarchy, projection
 //! hierarchy, by its remainder mod 3); flag bits 4 to 7 equal to 5 pick the
 //! wide hierarchy instead (a value no corpus input had when it came, so
-//! the corpus kept its meaning).
+//! the corpus kept its meaning). Two more values leave the arenas intact
+//! and damage something else:
+//!
+//! - 6: one to three words of the scene changed by the input, then the
+//!   kd-tree, wide and TDBS arenas built over the original opened over the
+//!   changed scene: when `validate` accepts, every answer is a fresh
+//!   build's over the changed scene; the kd-tree accepts only an unchanged
+//!   scene (its scene digest);
+//! - 7: a saved file (`coray build -o`) damaged like an arena and given to
+//!   `coray_saved_open`: when it opens, the tree answers as the clean
+//!   file's.
 
 use coray::tolerance::near_tie;
 use coray_ffi::*;
@@ -74,6 +84,7 @@ impl Input<'_> {
 }
 
 /// The scene's arrays: a floor, a few triangles, spheres and cones.
+#[derive(Clone)]
 struct SceneData {
     vertices: Vec<f32>,
     indices: Vec<u32>,
@@ -107,6 +118,19 @@ impl SceneData {
             s.cones[inp.u8() as usize % n] = inp.f32();
         }
         s
+    }
+
+    /// Every word the same, bit for bit (NaN equals its own bits).
+    fn same_bits(&self, o: &SceneData) -> bool {
+        let f = |a: &[f32], b: &[f32]| {
+            a.iter()
+                .map(|x| x.to_bits())
+                .eq(b.iter().map(|x| x.to_bits()))
+        };
+        f(&self.vertices, &o.vertices)
+            && self.indices == o.indices
+            && f(&self.spheres, &o.spheres)
+            && f(&self.cones, &o.cones)
     }
 
     fn prims(&self) -> usize {
@@ -150,8 +174,8 @@ fn rays(inp: &mut Input) -> Vec<CorayRay> {
     v
 }
 
-/// Status codes there are (`CORAY_STATUS_OK` = 0 to `_NO_ROPES` = 10).
-pub const STATUS_COUNT: usize = CorayStatus::NoRopes as usize + 1;
+/// Status codes there are (`CORAY_STATUS_OK` = 0 to `_DAMAGED_FILE` = 11).
+pub const STATUS_COUNT: usize = CorayStatus::DamagedFile as usize + 1;
 
 /// What a run saw: how many calls ended with each status.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -246,8 +270,13 @@ pub fn run(data: &[u8]) -> Report {
     let sd = SceneData::new(&mut inp, flags & 4 != 0);
     let rays = rays(&mut inp);
     let mut rep = Report::default();
-    if flags >> 4 == WIDE_FLAGS {
-        wide(&sd, &rays, &mut inp, how, &mut rep);
+    match flags >> 4 {
+        WIDE_FLAGS => wide(&sd, &rays, &mut inp, how, &mut rep),
+        SCENE_FLAGS => scene_changed(&sd, &rays, &mut inp, &mut rep),
+        SAVED_FLAGS => saved_damaged(&sd, &rays, &mut inp, how, &mut rep),
+        _ => {}
+    }
+    if matches!(flags >> 4, WIDE_FLAGS | SCENE_FLAGS | SAVED_FLAGS) {
         return rep;
     }
     match family % 3 {
@@ -978,6 +1007,230 @@ fn bvh_trace(h: &CorayBvh, rays: &[CorayRay], stack_bytes: usize, rep: &mut Repo
 
 /// Flag bits 4 to 7 that pick the wide hierarchy.
 pub const WIDE_FLAGS: u8 = 5;
+/// Flag bits 4 to 7 that pick a scene changed under intact arenas.
+pub const SCENE_FLAGS: u8 = 6;
+/// Flag bits 4 to 7 that pick a damaged saved file.
+pub const SAVED_FLAGS: u8 = 7;
+
+/// A family's requirements call.
+type RequirementsFn<P> =
+    unsafe extern "C" fn(usize, *const P, *mut CorayRequirements) -> CorayStatus;
+/// A family's build call.
+type BuildFn<P> = unsafe extern "C" fn(
+    *const CorayScene,
+    *const P,
+    *mut c_void,
+    usize,
+    *mut c_void,
+    usize,
+    *mut usize,
+) -> CorayStatus;
+
+/// An arena built over `sd` by a family's calls, and its requirements;
+/// `None` when a call refused (noted).
+fn built<P>(
+    what: &str,
+    sd: &SceneData,
+    params: &P,
+    (requirements_of, build): (RequirementsFn<P>, BuildFn<P>),
+    rep: &mut Report,
+) -> Option<(Vec<Block>, CorayRequirements)> {
+    let mut req = requirements();
+    // SAFETY: params and req are live locals with struct_size set.
+    let s = unsafe { requirements_of(sd.prims(), params, &mut req) };
+    if rep.note(&format!("{what} requirements"), s) != CorayStatus::Ok {
+        return None;
+    }
+    let mut arena = blocks(req.arena_bytes);
+    let mut scratch = blocks(req.scratch_bytes);
+    let scene = sd.scene();
+    // SAFETY: the scene's arrays outlive the call; arena and scratch are
+    // 16-byte aligned buffers of at least the sizes passed.
+    let s = unsafe {
+        build(
+            &scene,
+            params,
+            arena.as_mut_ptr().cast(),
+            req.arena_bytes,
+            scratch.as_mut_ptr().cast(),
+            req.scratch_bytes,
+            core::ptr::null_mut(),
+        )
+    };
+    (rep.note(&format!("{what} build"), s) == CorayStatus::Ok).then_some((arena, req))
+}
+
+/// The kd-tree (auto, ropes), wide and TDBS arenas built over `sd`, then
+/// opened over `sd` with one to three words changed by the input.
+fn scene_changed(sd: &SceneData, rays: &[CorayRay], inp: &mut Input, rep: &mut Report) {
+    let mut changed = sd.clone();
+    for _ in 0..1 + inp.u8() % 3 {
+        let bits = inp.u32();
+        let at = inp.u8() as usize;
+        let c = &mut changed;
+        match inp.u8() % 4 {
+            0 => c.vertices[at % sd.vertices.len()] = f32::from_bits(bits),
+            // Mostly another vertex, sometimes any index.
+            1 => c.indices[at % sd.indices.len()] = if bits >> 31 == 0 { bits % 10 } else { bits },
+            2 => c.spheres[at % sd.spheres.len()] = f32::from_bits(bits),
+            _ => c.cones[at % sd.cones.len()] = f32::from_bits(bits),
+        }
+    }
+    let scene = changed.scene();
+    let kd_params = CorayKdParams {
+        omit_ropes: 0,
+        ..coray_kdtree_params_default(CORAY_KD_PRESET_AUTO)
+    };
+    let kd_calls = (
+        coray_kdtree_requirements as RequirementsFn<CorayKdParams>,
+        coray_kdtree_build as BuildFn<CorayKdParams>,
+    );
+    if let Some((arena, req)) = built("kd", sd, &kd_params, kd_calls, rep) {
+        if let Ok(t) = open_kd(&arena, req.arena_bytes, &scene).map_err(|s| rep.note("kd open", s))
+        {
+            // SAFETY: a handle just opened; the stack is ignored by kd.
+            let v = unsafe {
+                coray_kdtree_validate(&t, core::ptr::null_mut(), 0, core::ptr::null_mut())
+            };
+            if rep.note("kd validate", v) == CorayStatus::Ok {
+                assert!(
+                    changed.same_bits(sd),
+                    "kd: validate accepted a tree over a changed scene"
+                );
+            }
+            kd_trace(&t, rays, CORAY_TRAVERSAL_HIERARCHICAL, rep);
+        }
+    }
+    let wide_params = coray_wide_params_default();
+    let wide_calls = (
+        coray_wide_requirements as RequirementsFn<CorayWideParams>,
+        coray_wide_build as BuildFn<CorayWideParams>,
+    );
+    if let Some((arena, req)) = built("wide", sd, &wide_params, wide_calls, rep) {
+        if let Ok(h) =
+            open_wide(&arena, req.arena_bytes, &scene).map_err(|s| rep.note("wide open", s))
+        {
+            // SAFETY: a handle just opened.
+            let v = unsafe { coray_wide_validate(&h, core::ptr::null_mut()) };
+            let got = wide_trace(&h, rays, req.stack_bytes, rep);
+            if rep.note("wide validate", v) == CorayStatus::Ok {
+                let (fresh, freq) = built("wide", &changed, &wide_params, wide_calls, rep)
+                    .expect("a scene a tree validates over builds");
+                let f = open_wide(&fresh, freq.arena_bytes, &scene).expect("a fresh build opens");
+                compare(
+                    "wide over a changed scene",
+                    &wide_trace(&f, rays, freq.stack_bytes, rep),
+                    &got,
+                    rays,
+                );
+            }
+        }
+    }
+    let bvh_params = coray_bvh_params_default(CORAY_BVH_BUILDER_TDBS);
+    let bvh_calls = (
+        coray_bvh_requirements as RequirementsFn<CorayBvhParams>,
+        coray_bvh_build as BuildFn<CorayBvhParams>,
+    );
+    if let Some((arena, req)) = built("bvh", sd, &bvh_params, bvh_calls, rep) {
+        if let Ok(h) =
+            open_bvh(&arena, req.arena_bytes, &scene).map_err(|s| rep.note("bvh open", s))
+        {
+            let v = bvh_validate(&h, req.stack_bytes, rep);
+            let got = bvh_trace(&h, rays, req.stack_bytes, rep);
+            if v == CorayStatus::Ok {
+                let (fresh, freq) = built("bvh", &changed, &bvh_params, bvh_calls, rep)
+                    .expect("a scene a tree validates over builds");
+                let f = open_bvh(&fresh, freq.arena_bytes, &scene).expect("a fresh build opens");
+                compare(
+                    "bvh over a changed scene",
+                    &bvh_trace(&f, rays, freq.stack_bytes, rep),
+                    &got,
+                    rays,
+                );
+            }
+        }
+    }
+}
+
+/// A saved file of a kd-tree over `sd`, damaged as the input says, then
+/// opened by `coray_saved_open`.
+fn saved_damaged(
+    sd: &SceneData,
+    rays: &[CorayRay],
+    inp: &mut Input,
+    how: Damage,
+    rep: &mut Report,
+) {
+    let v: Vec<[f32; 3]> = sd
+        .vertices
+        .chunks_exact(3)
+        .map(|c| [c[0], c[1], c[2]])
+        .collect();
+    let t: Vec<[u32; 3]> = sd
+        .indices
+        .chunks_exact(3)
+        .map(|c| [c[0], c[1], c[2]])
+        .collect();
+    let sp: Vec<coray::Sphere> = sd
+        .spheres
+        .chunks_exact(4)
+        .map(|c| coray::Sphere {
+            center: [c[0], c[1], c[2]],
+            radius: c[3],
+        })
+        .collect();
+    let co: Vec<coray::Cone> = sd
+        .cones
+        .chunks_exact(8)
+        .map(|c| coray::Cone {
+            base: [c[0], c[1], c[2]],
+            base_radius: c[3],
+            apex: [c[4], c[5], c[6]],
+            apex_radius: c[7],
+        })
+        .collect();
+    let scene = coray::Scene {
+        vertices: &v,
+        triangles: &t,
+        spheres: &sp,
+        cones: &co,
+    };
+    let preset = (inp.u8() % 2) as CorayKdPreset;
+    let omit = (inp.u8() % 3) as u32;
+    let file = match coray_ffi::saved::kdtree_file(&scene, preset, omit) {
+        Ok(f) => f,
+        Err(s) => {
+            rep.note("saved write", s);
+            return;
+        }
+    };
+    let open = |bytes: &[u8], rep: &mut Report| {
+        let b = from_bytes(bytes);
+        let mut out = coray_saved_default();
+        // SAFETY: b is 16-byte aligned and holds bytes.len() bytes.
+        let s = unsafe { coray_saved_open(b.as_ptr().cast(), bytes.len(), &mut out) };
+        (rep.note("saved open", s) == CorayStatus::Ok).then_some((b, out))
+    };
+    let (_keep, clean) = open(&file, rep).expect("a clean file opens");
+    let want = kd_trace(&clean.tree, rays, CORAY_TRAVERSAL_HIERARCHICAL, rep);
+    let mut bytes = file.clone();
+    damage(&mut bytes, inp, how);
+    if let Some((_keep, got)) = open(&bytes, rep) {
+        rep.validated = true;
+        assert!(
+            bytes == file,
+            "coray_saved_open accepted a damaged file ({} bytes, {} written)",
+            bytes.len(),
+            file.len()
+        );
+        compare(
+            "saved",
+            &want,
+            &kd_trace(&got.tree, rays, CORAY_TRAVERSAL_HIERARCHICAL, rep),
+            rays,
+        );
+    }
+}
 
 fn wide(sd: &SceneData, rays: &[CorayRay], inp: &mut Input, how: Damage, rep: &mut Report) {
     let scene = sd.scene();

@@ -112,3 +112,35 @@ fn kd_builds_with_hostile_job_runners_match_the_clean_build() {
     // Jobs ran (OK) and misuse was refused (INVALID_PARAMETER).
     assert!(statuses[0] > 0 && statuses[4] > 0, "{statuses:?}");
 }
+
+/// Scenes changed under intact arenas (flag bits 4 to 7 = SCENE_FLAGS)
+/// and damaged saved files (SAVED_FLAGS), every kind of damage: the
+/// harness asserts that the kd-tree refuses every changed scene, that what
+/// the other families accept answers as a fresh build over it, and that
+/// no damaged file opens. Both refusals are exercised.
+#[test]
+fn changed_scenes_and_damaged_saved_files_run_clean() {
+    use coray_fuzz_harness::{SAVED_FLAGS, SCENE_FLAGS, STATUS_COUNT};
+    let mut g = SplitMix64(18);
+    let mut statuses = [[0u32; STATUS_COUNT]; 2];
+    for (k, mode) in [SCENE_FLAGS, SAVED_FLAGS].into_iter().enumerate() {
+        for flags in 0..8u8 {
+            for _ in 0..20 {
+                let mut data = vec![0, flags | mode << 4];
+                let len = 16 + g.below(200) as usize;
+                data.extend((0..len).map(|_| g.next_u64() as u8));
+                let r = run(&data);
+                for (s, n) in statuses[k].iter_mut().zip(r.statuses) {
+                    *s += n;
+                }
+            }
+        }
+    }
+    let (corrupt, damaged) = (7, 11);
+    assert!(
+        statuses[0][corrupt] > 0,
+        "changed scenes: {:?}",
+        statuses[0]
+    );
+    assert!(statuses[1][damaged] > 100, "saved files: {:?}", statuses[1]);
+}
