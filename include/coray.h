@@ -449,7 +449,10 @@ typedef struct CorayKdTreeInfo {
 // `run_jobs`, with `flags`: at least `flags_bytes` writable bytes that
 // only this call uses (one buffer per thread, reused from job to job). A
 // job runs at most once: a second call for it fails with
-// `CORAY_STATUS_INVALID_PARAMETER`. Call it only while `run_jobs` runs
+// `CORAY_STATUS_INVALID_PARAMETER`, as do flags that overlap the scene,
+// the arena, the scratch, `jobs` itself, another running job's flags, or
+// coray's own stack (the 256 KiB below this call, and the build's frames
+// up to 16 KiB above its entry). Call it only while `run_jobs` runs
 // (`jobs` is gone afterwards). A job whose call failed, or that no call
 // ran, runs on the building thread once `run_jobs` returns.
 typedef enum CorayStatus (*CorayKdRunJob)(void *jobs, size_t job, uint8_t *flags, size_t flags_bytes);

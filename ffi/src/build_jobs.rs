@@ -10,13 +10,24 @@ use crate::{guard, CorayStatus};
 use coray::kd::{KdJob, KdJobs, KD_MAX_JOBS};
 use core::cell::UnsafeCell;
 use core::ffi::c_void;
-use core::sync::atomic::{AtomicBool, Ordering};
+use core::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+
+/// Stack below a `run_job` call that its flags may not use: where the
+/// call and its job put their frames.
+const STACK_BELOW_A_JOB: usize = 256 << 10;
+
+/// Stack above the build's entry that job flags may not use: the entry
+/// call's own frame lies there, of a size the code cannot read.
+const STACK_ABOVE_THE_ENTRY: usize = 16 << 10;
 
 /// Runs job `job` (0 to `job_count` - 1) of the build that called
 /// `run_jobs`, with `flags`: at least `flags_bytes` writable bytes that
 /// only this call uses (one buffer per thread, reused from job to job). A
 /// job runs at most once: a second call for it fails with
-/// `CORAY_STATUS_INVALID_PARAMETER`. Call it only while `run_jobs` runs
+/// `CORAY_STATUS_INVALID_PARAMETER`, as do flags that overlap the scene,
+/// the arena, the scratch, `jobs` itself, another running job's flags, or
+/// coray's own stack (the 256 KiB below this call, and the build's frames
+/// up to 16 KiB above its entry). Call it only while `run_jobs` runs
 /// (`jobs` is gone afterwards). A job whose call failed, or that no call
 /// ran, runs on the building thread once `run_jobs` returns.
 pub type CorayKdRunJob = unsafe extern "C" fn(
@@ -51,11 +62,24 @@ struct JobTable<'j> {
     /// The build's scene, arena and scratch: no job's flags may overlap
     /// them.
     regions: Regions,
+    /// The building thread's stack from this table to above the build's
+    /// entry: coray's frames, which no job's flags may overlap.
+    frames: (usize, usize),
+    /// Per job, the flags it runs with (start, end; 0, 0 when it does not
+    /// run): no two running jobs may share bytes.
+    running: [(AtomicUsize, AtomicUsize); KD_MAX_JOBS],
+}
+
+/// Whether the spans `[a.0, a.1)` and `[b.0, b.1)` share a byte.
+fn overlap(a: (usize, usize), b: (usize, usize)) -> bool {
+    a.0 < b.1 && b.0 < a.1
 }
 
 /// Hands `jobs` to `run_jobs` and returns when it does. `regions` holds
-/// the call's scene, arena and scratch. Never inlined: the job table's
-/// stack (about 7 KiB) is spent only by builds that hand out their jobs.
+/// the call's scene, arena and scratch; `entry` is the address of a local
+/// of the build's entry point (the top of coray's frames, but for that
+/// frame's own size). Never inlined: the job table's stack (about 7 KiB)
+/// is spent only by builds that hand out their jobs.
 #[inline(never)]
 pub(crate) fn run_with(
     jobs: KdJobs<'_>,
@@ -63,6 +87,7 @@ pub(crate) fn run_with(
     ctx: *mut c_void,
     prim_count: usize,
     regions: Regions,
+    entry: usize,
 ) {
     let mut table = JobTable {
         slots: core::array::from_fn(|_| UnsafeCell::new(None)),
@@ -70,7 +95,15 @@ pub(crate) fn run_with(
         count: 0,
         flags_bytes: prim_count,
         regions,
+        frames: (0, 0),
+        running: core::array::from_fn(|_| (AtomicUsize::new(0), AtomicUsize::new(0))),
     };
+    // The stack grows down: from the table up to past the entry's frame.
+    let at = core::ptr::addr_of!(table) as usize;
+    table.frames = (
+        at.min(entry),
+        entry.max(at + core::mem::size_of::<JobTable>()) + STACK_ABOVE_THE_ENTRY,
+    );
     for (slot, job) in table.slots.iter_mut().zip(jobs) {
         *slot.get_mut() = Some(job);
         table.count += 1;
@@ -109,19 +142,48 @@ unsafe extern "C" fn run_job(
         }
         let mut regions = table.regions;
         regions.add(flags, flags_bytes, true).check()?;
+        // Flags in coray's own memory: the job table, the build's frames,
+        // the stack this call and its job are about to use.
+        let span = (flags as usize, (flags as usize).saturating_add(flags_bytes));
+        let here = 0u8;
+        let sp = core::hint::black_box(&here) as *const u8 as usize;
+        let table_span = (
+            jobs as usize,
+            jobs as usize + core::mem::size_of::<JobTable>(),
+        );
+        let below = (sp.saturating_sub(STACK_BELOW_A_JOB), sp.saturating_add(1));
+        if overlap(span, table_span) || overlap(span, table.frames) || overlap(span, below) {
+            return Err(CorayStatus::InvalidParameter);
+        }
         // SAFETY: `flags` is writable for `flags_bytes` and this call's
         // alone (the contract); checked above not to overlap the scene,
-        // the arena or the scratch.
+        // the arena, the scratch or coray's own memory.
         let flags = unsafe { carve::output(flags, flags_bytes)? };
         if table.claimed[job].swap(true, Ordering::AcqRel) {
             return Err(CorayStatus::InvalidParameter);
         }
-        // SAFETY: this call claimed slot `job` above; no other call will,
-        // and run_with touches the slots again only after run_jobs
-        // returned, when every call has returned.
-        let slot = unsafe { &mut *table.slots[job].get() };
-        let job = slot.take().ok_or(CorayStatus::InternalError)?;
-        job.run(flags)?;
-        Ok(())
+        // Published before the others are read: of two calls whose flags
+        // overlap, at least one sees the other's (sequential consistency),
+        // and refuses; its job then runs on the building thread.
+        let (start, end) = &table.running[job];
+        start.store(span.0, Ordering::SeqCst);
+        end.store(span.1, Ordering::SeqCst);
+        let shared = (0..table.count).any(|other| {
+            let (s, e) = &table.running[other];
+            other != job && overlap(span, (s.load(Ordering::SeqCst), e.load(Ordering::SeqCst)))
+        });
+        let done = if shared {
+            Err(CorayStatus::InvalidParameter)
+        } else {
+            // SAFETY: this call claimed slot `job` above; no other call
+            // will, and run_with touches the slots again only after
+            // run_jobs returned, when every call has returned.
+            let slot = unsafe { &mut *table.slots[job].get() };
+            let run = slot.take().ok_or(CorayStatus::InternalError)?;
+            run.run(flags).map_err(CorayStatus::from)
+        };
+        end.store(0, Ordering::SeqCst);
+        start.store(0, Ordering::SeqCst);
+        done
     })
 }

@@ -396,7 +396,8 @@ pub unsafe extern "C" fn coray_kdtree_build_jobs(
         };
         let mut build = kd::build_begin_for_threads(&scene, &p, storage, scratch, threads)?;
         if let Some(run_jobs) = run_jobs {
-            crate::build_jobs::run_with(build.jobs(), run_jobs, ctx, n, regions);
+            let entry = core::hint::black_box(&threads) as *const usize as usize;
+            crate::build_jobs::run_with(build.jobs(), run_jobs, ctx, n, regions, entry);
         }
         let info = *build.finish()?.info();
         // The tree packed at the arena's start: the caller keeps only

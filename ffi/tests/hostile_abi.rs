@@ -2045,3 +2045,146 @@ fn array_calls_stop_at_the_first_fault() {
         assert!(stopped, "{what}: no damage made the call fault");
     }
 }
+
+/// What a hostile job runner hands `run_job` as a job's flags.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum JobFlags {
+    /// The job table itself (`jobs`).
+    Table,
+    /// The runner's stack below its own frame: where `run_job` and the
+    /// job itself will have theirs.
+    StackBelow,
+    /// Just past the job table, where the build's own frames lie.
+    PastTable,
+    /// One buffer for every job, from two threads at once.
+    Shared,
+}
+
+struct Runner {
+    how: JobFlags,
+    statuses: std::sync::Mutex<Vec<CorayStatus>>,
+    buffer: std::sync::Mutex<Vec<u8>>,
+}
+
+unsafe extern "C" fn hostile_runner(
+    ctx: *mut c_void,
+    job_count: usize,
+    flags_bytes: usize,
+    run_job: CorayKdRunJob,
+    jobs: *mut c_void,
+) {
+    let r = unsafe { &*ctx.cast::<Runner>() };
+    let flags: *mut u8 = match r.how {
+        JobFlags::Table => jobs.cast(),
+        JobFlags::StackBelow => {
+            let here = 0u8;
+            (core::hint::black_box(&here) as *const u8)
+                .cast_mut()
+                .wrapping_sub(2048 + flags_bytes)
+        }
+        JobFlags::PastTable => jobs.cast::<u8>().wrapping_add(8192),
+        JobFlags::Shared => r.buffer.lock().unwrap().as_mut_ptr(),
+    };
+    let (f, jb) = (flags as usize, jobs as usize);
+    let run =
+        move |job: usize| unsafe { run_job(jb as *mut c_void, job, f as *mut u8, flags_bytes) };
+    if r.how == JobFlags::Shared {
+        let half = job_count / 2;
+        std::thread::scope(|s| {
+            let a = s.spawn(|| (0..half).map(run).collect::<Vec<_>>());
+            let b = s.spawn(|| (half..job_count).map(run).collect::<Vec<_>>());
+            let mut st = r.statuses.lock().unwrap();
+            st.extend(a.join().unwrap());
+            st.extend(b.join().unwrap());
+        });
+    } else {
+        let st: Vec<_> = (0..job_count).map(run).collect();
+        r.statuses.lock().unwrap().extend(st);
+    }
+}
+
+/// A job runner that hands `run_job` flags inside the job table, inside
+/// the stack where the job will run or the build's own frames lie, or
+/// one buffer to two threads at once: each such call is refused with
+/// `INVALID_PARAMETER` (the job then runs on the building thread), never
+/// a panic or a crash, and the arena is `coray_kdtree_build`'s. Before,
+/// these returned `INTERNAL_ERROR` (a panic in the build) or crashed.
+#[test]
+fn hostile_job_runners_get_statuses() {
+    // 3,000 small triangles in a row: a tree with many jobs.
+    let mut v = Vec::new();
+    let mut idx = Vec::new();
+    for i in 0..3000u32 {
+        let x = i as f32 * 0.01;
+        v.extend([x, 0.0, 0.0, x + 0.005, 0.0, 0.0, x, 0.005, 0.3]);
+        idx.extend([3 * i, 3 * i + 1, 3 * i + 2]);
+    }
+    let mut s = coray_scene_default();
+    s.vertices = v.as_ptr();
+    s.vertex_count = v.len() / 3;
+    s.indices = idx.as_ptr();
+    s.triangle_count = 3000;
+    let p = CorayKdParams {
+        job_threads: 4,
+        ..coray_kdtree_params_default(CORAY_KD_PRESET_AUTO)
+    };
+    let mut r = requirements();
+    unsafe {
+        assert_eq!(coray_kdtree_requirements(3000, &p, &mut r), CorayStatus::Ok);
+        let mut clean = arena(r.arena_bytes);
+        let mut sc = arena(r.scratch_bytes);
+        let null = core::ptr::null_mut();
+        let (cp, sp) = (clean.as_mut_ptr().cast(), sc.as_mut_ptr().cast());
+        assert_eq!(
+            coray_kdtree_build(&s, &p, cp, r.arena_bytes, sp, r.scratch_bytes, null),
+            CorayStatus::Ok
+        );
+        for how in [
+            JobFlags::Table,
+            JobFlags::StackBelow,
+            JobFlags::PastTable,
+            JobFlags::Shared,
+        ] {
+            let runner = Runner {
+                how,
+                statuses: Default::default(),
+                buffer: std::sync::Mutex::new(vec![0; 3000]),
+            };
+            let mut a = arena(r.arena_bytes);
+            let ctx = (&runner as *const Runner).cast_mut().cast();
+            let st = coray_kdtree_build_jobs(
+                &s,
+                &p,
+                a.as_mut_ptr().cast(),
+                r.arena_bytes,
+                sp,
+                r.scratch_bytes,
+                null,
+                Some(hostile_runner),
+                ctx,
+            );
+            assert_eq!(st, CorayStatus::Ok, "{how:?}");
+            let statuses = runner.statuses.lock().unwrap().clone();
+            assert!(statuses.len() > 2, "{how:?}: {} jobs", statuses.len());
+            for s in &statuses {
+                assert!(
+                    matches!(s, CorayStatus::Ok | CorayStatus::InvalidParameter),
+                    "{how:?}: {s:?}"
+                );
+            }
+            if how != JobFlags::Shared {
+                assert!(
+                    statuses.iter().all(|&s| s == CorayStatus::InvalidParameter),
+                    "{how:?}: {statuses:?}"
+                );
+            }
+            let bytes = |b: &[Block]| {
+                b.iter()
+                    .flat_map(|x| x.0)
+                    .take(r.arena_bytes)
+                    .collect::<Vec<u8>>()
+            };
+            assert!(bytes(&a) == bytes(&clean), "{how:?}: the arena differs");
+        }
+    }
+}
