@@ -224,3 +224,62 @@ fn a_projection_hierarchy_refuses_a_changed_scene_or_answers_as_over_it() {
         }
     }
 }
+
+/// The wide hierarchy and every static BVH built over `s`, each as its
+/// `validate` over a scene given later.
+fn validators(s: &Scene) -> Vec<(String, Box<dyn Fn(Scene) -> bool>)> {
+    let wide = OwnedWide::new(s, 8).unwrap();
+    let mut v: Vec<(String, Box<dyn Fn(Scene) -> bool>)> = vec![(
+        "wide".into(),
+        Box::new(move |s: Scene| wide.view(s).is_ok_and(|w| w.validate().is_ok())),
+    )];
+    for b in [
+        Builder::Tdbs,
+        Builder::TdbsSah,
+        Builder::Nn,
+        Builder::NnChain,
+    ] {
+        let o = OwnedBvh::new(s, BvhBuild::Static(b, 1)).unwrap();
+        v.push((
+            format!("{b:?}"),
+            Box::new(move |s: Scene| o.validate(s).is_ok()),
+        ));
+    }
+    v
+}
+
+/// Found by the fuzz target's changed-scene mode: a triangle degenerate at
+/// build time is in no leaf; an index change that heals it left the wide
+/// hierarchy and the static BVHs validating while a ray through the healed
+/// triangle missed it (a fresh build hits it). And a degenerate triangle's
+/// corner index set out of range validated, where every build refuses
+/// that scene. `validate` now requires the leaves to hold exactly the
+/// scene's non-degenerate primitives and checks the scene first.
+#[test]
+fn a_healed_degenerate_primitive_is_refused() {
+    let mut o = random_scene(&mut Rng(60), 40, 10, 0, 10.0);
+    // Triangle 0 degenerate: its third corner is its first.
+    o.triangles[0][2] = o.triangles[0][0];
+    for (what, validates) in validators(&o.scene()) {
+        assert!(validates(o.scene()), "{what}: its own build refused");
+        // Healed: the third corner a vertex of another triangle.
+        let mut healed = o.clone();
+        healed.triangles[0][2] = o.triangles[1][1];
+        assert!(
+            healed.scene().prim_bounds(0).is_some(),
+            "the healed triangle is a real one"
+        );
+        assert!(
+            !validates(healed.scene()),
+            "{what}: accepted a scene with a primitive its leaves miss"
+        );
+        // The corner out of range: no build accepts that scene.
+        let mut out = o.clone();
+        out.triangles[0][2] = o.vertices.len() as u32;
+        assert!(coray::Scene::check(&out.scene()).is_err());
+        assert!(
+            !validates(out.scene()),
+            "{what}: accepted a scene whose indices no build accepts"
+        );
+    }
+}

@@ -43,7 +43,15 @@ impl Bvh<'_> {
         min_children: Option<u32>,
         stack: &mut [BvhStackItem],
     ) -> Result<BvhTreeStats, Error> {
-        self.validate_with(min_children, stack, |_, _| Ok(()))
+        let st = self.validate_with(min_children, stack, |_, _| Ok(()))?;
+        if min_children.is_none()
+            && self.scene.built_refs() != (self.info.ref_count as u64, self.info.ref_digest())
+        {
+            return Err(corrupt(
+                "leaves differ from the scene's non-degenerate primitives",
+            ));
+        }
+        Ok(st)
     }
 
     /// [`Bvh::validate`], calling `extra(index, node)` on every node it
@@ -54,6 +62,7 @@ impl Bvh<'_> {
         stack: &mut [BvhStackItem],
         mut extra: impl FnMut(u32, &BvhNode) -> Result<(), Error>,
     ) -> Result<BvhTreeStats, Error> {
+        self.scene.check()?;
         let info = &self.info;
         if info.depth >= info.node_count.max(1)
             || info.node_count as usize > self.nodes.len()

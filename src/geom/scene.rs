@@ -74,6 +74,20 @@ impl<'a> Scene<'a> {
         crate::rng::mix64(d)
     }
 
+    /// How many primitives a build over the whole scene puts in its leaves
+    /// (those [`Scene::prim_bounds`] keeps: not degenerate, in range), and
+    /// [`crate::rng::ref_digest`] of them. A static hierarchy records both
+    /// at build time; `validate` compares them with the scene it is given,
+    /// so a primitive that was degenerate at build time (in no leaf) and is
+    /// not any more is refused, as is one that has become degenerate.
+    pub fn built_refs(&self) -> (u64, u64) {
+        (0..self.prim_count())
+            .filter(|&p| self.prim_bounds(p).is_some_and(|b| !b.is_empty()))
+            .fold((0, 0), |(n, d), p| {
+                (n + 1, d.wrapping_add(crate::rng::ref_mix(p as u32)))
+            })
+    }
+
     /// Number of primitives of all kinds.
     #[inline]
     pub fn prim_count(&self) -> usize {

@@ -27,12 +27,15 @@ impl WideBvh<'_> {
     /// primitives lie in range and are not degenerate, that the leaves hold
     /// `ref_count` primitives with the recorded digest, leaf and block
     /// counts, and that every block holds the scene's corners of its
-    /// triangles (NaN elsewhere).
+    /// triangles (NaN elsewhere). The scene must pass
+    /// [`crate::Scene::check`], and the leaves hold exactly its
+    /// non-degenerate primitives ([`crate::Scene::built_refs`]).
     ///
     /// Never panics, in time linear in the hierarchy. Once it accepts a
     /// hierarchy, every traversal of it gives the hits of a clean build
     /// with the same leaves.
     pub fn validate(&self) -> Result<Shape, Error> {
+        self.scene.check()?;
         let info = &self.info;
         let count = info.node_count as usize;
         if count == 0 || count > self.nodes.len() || info.block_count as usize > self.blocks.len() {
@@ -101,6 +104,11 @@ impl WideBvh<'_> {
         }
         if digest != info.ref_digest() {
             return Err(corrupt("reference digest"));
+        }
+        if self.scene.built_refs() != (prims, digest) {
+            return Err(corrupt(
+                "leaves differ from the scene's non-degenerate primitives",
+            ));
         }
         shape.refs = info.ref_count;
         shape.depth = depth;
