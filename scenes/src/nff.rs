@@ -139,60 +139,111 @@ impl fmt::Display for NffError {
 impl std::error::Error for NffError {}
 
 /// A token and where it starts.
+#[derive(Clone, Copy)]
 struct Tok<'a> {
     text: &'a str,
     line: usize,
     col: usize,
 }
 
-/// Splits the input into whitespace-separated tokens, dropping `#`
-/// comments, keeping positions; also knows where the input ends.
+/// A token as an error message shows it: at most [`SHOWN_CHARS`]
+/// characters, and the token's length when it was cut, so that a hostile
+/// token of any size makes a message of a few lines.
+pub fn shown(token: &str) -> String {
+    match token.char_indices().nth(SHOWN_CHARS) {
+        None => token.to_string(),
+        Some((cut, _)) => format!("{}... ({} bytes)", &token[..cut], token.len()),
+    }
+}
+
+/// The characters of a token that [`shown`] keeps.
+pub const SHOWN_CHARS: usize = 80;
+
+/// Splits the input into whitespace-separated tokens as they are asked
+/// for, dropping `#` comments, keeping positions: the reader holds a few
+/// tokens at a time, never a list of the file's, so a file of any shape
+/// costs its own size and no more.
 struct Lexer<'a> {
-    toks: Vec<Tok<'a>>,
-    at: usize,
+    lines: std::iter::Enumerate<std::str::Lines<'a>>,
+    /// The current line's code (before any `#`), its number, the byte
+    /// offset and the 1-based column reached in it.
+    code: &'a str,
+    line: usize,
+    byte: usize,
+    col: usize,
+    /// The token read ahead by [`Lexer::peek`].
+    peeked: Option<Tok<'a>>,
+    /// The line of the last token taken.
+    last_line: usize,
+    /// Where the input ends, once the last line has been reached.
     end: (usize, usize),
 }
 
 impl<'a> Lexer<'a> {
     fn new(src: &'a str) -> Lexer<'a> {
-        let mut toks = Vec::new();
-        let mut last = (1, 1);
-        for (li, line) in src.lines().enumerate() {
-            let code = match line.find('#') {
-                Some(i) => &line[..i],
-                None => line,
-            };
-            // (byte offset, column) of the token being read; columns are
-            // counted once per character, so a line costs its length.
-            let mut start = None;
-            for (ci, (bi, ch)) in code
-                .char_indices()
-                .chain(std::iter::once((code.len(), ' ')))
-                .enumerate()
-            {
-                if ch.is_whitespace() {
-                    if let Some((s, col)) = start.take() {
-                        toks.push(Tok {
-                            text: &code[s..bi],
-                            line: li + 1,
-                            col,
-                        });
-                    }
-                } else if start.is_none() {
-                    start = Some((bi, ci + 1));
-                }
-            }
-            last = (li + 1, line.chars().count() + 1);
-        }
         Lexer {
-            toks,
-            at: 0,
-            end: last,
+            lines: src.lines().enumerate(),
+            code: "",
+            line: 0,
+            byte: 0,
+            col: 1,
+            peeked: None,
+            last_line: 0,
+            end: (1, 1),
         }
     }
 
-    fn peek(&self) -> Option<&Tok<'a>> {
-        self.toks.get(self.at)
+    /// The next token of the input, past the one read ahead.
+    fn scan(&mut self) -> Option<Tok<'a>> {
+        loop {
+            let rest = &self.code[self.byte..];
+            let mut chars = rest.char_indices().peekable();
+            // Skip whitespace, counting columns.
+            while let Some(&(_, ch)) = chars.peek() {
+                if !ch.is_whitespace() {
+                    break;
+                }
+                chars.next();
+                self.col += 1;
+            }
+            if let Some(&(start, _)) = chars.peek() {
+                let col = self.col;
+                let mut stop = rest.len();
+                for (bi, ch) in chars {
+                    if ch.is_whitespace() {
+                        stop = bi;
+                        break;
+                    }
+                    self.col += 1;
+                }
+                self.byte += stop;
+                return Some(Tok {
+                    text: &rest[start..stop],
+                    line: self.line,
+                    col,
+                });
+            }
+            let (li, line) = self.lines.next()?;
+            self.code = line.find('#').map_or(line, |i| &line[..i]);
+            self.line = li + 1;
+            self.byte = 0;
+            self.col = 1;
+            self.end = (li + 1, line.chars().count() + 1);
+        }
+    }
+
+    fn peek(&mut self) -> Option<Tok<'a>> {
+        if self.peeked.is_none() {
+            self.peeked = self.scan();
+        }
+        self.peeked
+    }
+
+    /// Takes the next token (the one [`Lexer::peek`] showed, if it did).
+    fn take(&mut self) -> Option<Tok<'a>> {
+        let t = self.peeked.take().or_else(|| self.scan())?;
+        self.last_line = t.line;
+        Some(t)
     }
 
     fn err_at(&self, t: Option<&Tok>, msg: String) -> NffError {
@@ -210,18 +261,17 @@ impl<'a> Lexer<'a> {
         }
     }
 
-    fn next(&mut self, what: &str) -> Result<&Tok<'a>, NffError> {
-        if self.at >= self.toks.len() {
-            return Err(self.err_at(None, format!("end of file where {what} was expected")));
+    fn next(&mut self, what: &str) -> Result<Tok<'a>, NffError> {
+        match self.take() {
+            Some(t) => Ok(t),
+            None => Err(self.err_at(None, format!("end of file where {what} was expected"))),
         }
-        self.at += 1;
-        Ok(&self.toks[self.at - 1])
     }
 
     fn keyword(&mut self, word: &str) -> Result<(), NffError> {
         let t = self.next(&format!("`{word}`"))?;
         if t.text != word {
-            let (line, col, found) = (t.line, t.col, t.text.to_string());
+            let (line, col, found) = (t.line, t.col, shown(t.text));
             return Err(NffError {
                 line,
                 col,
@@ -236,7 +286,7 @@ impl<'a> Lexer<'a> {
         match t.text.parse::<f32>() {
             Ok(v) if v.is_finite() => Ok(v),
             _ => {
-                let (line, col, found) = (t.line, t.col, t.text.to_string());
+                let (line, col, found) = (t.line, t.col, shown(t.text));
                 Err(NffError {
                     line,
                     col,
@@ -258,7 +308,7 @@ impl<'a> Lexer<'a> {
         match t.text.parse::<u32>() {
             Ok(v) if (1..=max).contains(&v) => Ok(v),
             _ => {
-                let (line, col, found) = (t.line, t.col, t.text.to_string());
+                let (line, col, found) = (t.line, t.col, shown(t.text));
                 Err(NffError {
                     line,
                     col,
@@ -273,7 +323,7 @@ impl<'a> Lexer<'a> {
         match t.text.parse::<u64>() {
             Ok(v) if v <= max => Ok(v as usize),
             _ => {
-                let (line, col, found) = (t.line, t.col, t.text.to_string());
+                let (line, col, found) = (t.line, t.col, shown(t.text));
                 Err(NffError {
                     line,
                     col,
@@ -293,10 +343,9 @@ impl NffScene {
     pub fn parse(src: &str) -> Result<NffScene, NffError> {
         let mut lx = Lexer::new(src);
         let mut s = NffScene::default();
-        while let Some(t) = lx.peek() {
+        while let Some(t) = lx.take() {
             let (line, col) = (t.line, t.col);
             let cmd = t.text;
-            lx.at += 1;
             let material = s.materials.len().checked_sub(1);
             match cmd {
                 "v" => {
@@ -333,12 +382,11 @@ impl NffScene {
                 "l" => {
                     let pos = lx.vec3("a light coordinate")?;
                     // An optional colour: three numbers on the same line.
-                    let same_line = |lx: &Lexer, k: usize| {
-                        lx.toks.get(lx.at + k).is_some_and(|t| {
-                            t.line == lx.toks[lx.at - 1].line && t.text.parse::<f32>().is_ok()
-                        })
-                    };
-                    let color = if same_line(&lx, 0) {
+                    let line_of_pos = lx.last_line;
+                    let color = if lx
+                        .peek()
+                        .is_some_and(|t| t.line == line_of_pos && t.text.parse::<f32>().is_ok())
+                    {
                         Some(lx.vec3("a light colour component")?)
                     } else {
                         None
@@ -422,7 +470,7 @@ impl NffScene {
                     return Err(NffError {
                         line,
                         col,
-                        msg: format!("unknown command `{other}`"),
+                        msg: format!("unknown command `{}`", shown(other)),
                     });
                 }
             }

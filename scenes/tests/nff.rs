@@ -223,3 +223,38 @@ fn polygon_work_is_bounded() {
     let m = coray_scenes::SceneMesh::from_nff(&s);
     assert_eq!(m.triangles.len(), 8191);
 }
+
+/// Audit 55.7: a hostile token was echoed whole (a 200 MB name, a 200 MB
+/// message), and the reader listed every token of the file before reading
+/// the first command (a 200 MB line took 3.3 GB). Messages now cut tokens
+/// to 80 characters with their length; tokens are read as they are asked
+/// for, so an error early in a huge line is found where it is.
+#[test]
+fn hostile_tokens_make_short_messages() {
+    let token = "x".repeat(1_000_000);
+    for src in [
+        token.clone(),
+        format!("s 0 0 0 {token}"),
+        format!("v\nfrom {token} 0 0\n"),
+        format!("p {token}\n"),
+    ] {
+        let e = NffScene::parse(&src).unwrap_err().to_string();
+        assert!(e.len() < 300, "{} bytes: {}", e.len(), &e[..300]);
+        assert!(e.contains("... (1000000 bytes)"), "{e}");
+    }
+    // Short tokens are shown whole, multi-byte characters cut whole.
+    let e = NffScene::parse("qq").unwrap_err();
+    assert!(e.msg.ends_with("`qq`"), "{e}");
+    let e = NffScene::parse(&"é".repeat(100)).unwrap_err();
+    assert!(
+        e.msg
+            .contains(&format!("`{}... (200 bytes)`", "é".repeat(80))),
+        "{e}"
+    );
+    // A line of two million numbers after one sphere: the stray number is
+    // found at its column.
+    let src = format!("s 0 0 0 1 {}", "1 ".repeat(2_000_000));
+    let e = NffScene::parse(&src).unwrap_err();
+    assert_eq!((e.line, e.col), (1, 11), "{e}");
+    assert!(e.msg.contains("unknown command `1`"), "{e}");
+}

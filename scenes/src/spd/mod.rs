@@ -57,7 +57,8 @@ pub fn generate(name: &str, size: Option<u32>, opts: &Options) -> Result<NffScen
     let Some(&(_, default)) = SCENES.iter().find(|(n, _)| *n == name) else {
         let names: Vec<&str> = SCENES.iter().map(|(n, _)| *n).collect();
         return Err(format!(
-            "no SPD scene `{name}` (have: {})",
+            "no SPD scene `{}` (have: {})",
+            crate::nff::shown(name),
             names.join(", ")
         ));
     };
