@@ -23,6 +23,7 @@ mod stats;
 use bench::Settings;
 use clap::{Parser, Subcommand};
 use coray::kd::Traversal;
+use coray_scenes::nff::shown;
 use coray_scenes::spd::Options;
 use method::{Method, Preset};
 use scene::SceneData;
@@ -198,10 +199,14 @@ fn render_spd(
     let pixels = match res {
         None => spd::PIXELS,
         Some(r) => match parse_res(&r)? {
-            (w, h) if w == h && w < u64::from(coray::limits::MAX_IMAGE_SIDE) => w as u32,
+            (w, h) if w == h && (1..u64::from(coray::limits::MAX_IMAGE_SIDE)).contains(&w) => {
+                w as u32
+            }
             _ => {
                 return Err(format!(
-                    "--spd wants a square image below 32768 pixels: --res N, not `{r}`"
+                    "--spd wants a square image of 1 to {} pixels a side: --res N, not `{}`",
+                    coray::limits::MAX_IMAGE_SIDE - 1,
+                    shown(&r)
                 ))
             }
         },
@@ -225,7 +230,7 @@ fn render_spd(
             threads,
             progress: !json,
         };
-        (b.visit(job), threads)
+        (b.visit(job)?, threads)
     };
     render::write_image(
         output,
@@ -308,7 +313,7 @@ fn parse_res(s: &str) -> Result<(u64, u64), String> {
     let (w, h) = s.split_once('x').unwrap_or((s, s));
     let p = |v: &str| {
         v.parse::<u64>()
-            .map_err(|_| format!("bad resolution `{s}` (WxH or N)"))
+            .map_err(|_| format!("bad resolution `{}` (WxH or N)", shown(s)))
     };
     Ok((p(w)?, p(h)?))
 }
@@ -409,13 +414,16 @@ fn run(command: Command, floor_split: u32) -> Result<i32, String> {
                 s.set_resolution(w, h)?;
             }
             let (w, h) = (s.mesh.camera.width, s.mesh.camera.height);
-            budget::check_memory(&format!("a {w}x{h} image"), w as f64 * h as f64 * 3.0)?;
+            budget::check_memory(
+                &format!("a {w}x{h} image"),
+                w as f64 * h as f64 * budget::IMAGE_BYTES_PER_PIXEL,
+            )?;
             let b = built::Built::new(method, &s.mesh, preset, threads)?;
             let (rgb, rays, secs) = b.visit(render::Job {
                 mesh: &s.mesh,
                 depth,
                 threads,
-            });
+            })?;
             render::write_image(&output, w, h, &rgb)?;
             println!(
                 "{}: {} objects, {w}x{h}, {rays} rays ({:.2} Mrays/s on {threads} thread{}, {method} \
@@ -554,7 +562,10 @@ fn run(command: Command, floor_split: u32) -> Result<i32, String> {
                 || prefix.starts_with(|c: char| c.is_ascii_digit())
                 || !prefix.chars().all(ident)
             {
-                return Err(format!("--prefix must be a C identifier, not `{prefix}`"));
+                return Err(format!(
+                    "--prefix must be a C identifier, not `{}`",
+                    shown(&prefix)
+                ));
             }
             let s = scene::load(&scene, &opts)?;
             std::fs::write(&output, export::c_header(&scene, &prefix, &s.mesh))

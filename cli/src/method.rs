@@ -8,6 +8,7 @@ use coray::kd::{KdParams, Traversal};
 use coray::lcts::Scheme;
 use coray::owned::BvhBuild;
 use coray::proj::{Criteria, ProjBuilder, ProjScheme};
+use coray_scenes::nff::shown;
 use std::fmt;
 
 /// A kd-tree build preset.
@@ -32,7 +33,8 @@ impl Preset {
             "paper" => Ok(Preset::Paper),
             "compact" => Ok(Preset::Compact),
             _ => Err(format!(
-                "unknown preset `{s}` (have: {})",
+                "unknown preset `{}` (have: {})",
+                shown(s),
                 Preset::NAMES.join(", ")
             )),
         }
@@ -306,7 +308,7 @@ impl Method {
     /// Parses a method name.
     pub fn parse(s: &str) -> Result<Method, String> {
         Method::try_parse(s)
-            .ok_or_else(|| format!("unknown method `{s}` (have: {})", Method::help()))
+            .ok_or_else(|| format!("unknown method `{}` (have: {})", shown(s), Method::help()))
     }
 
     fn try_parse(s: &str) -> Option<Method> {

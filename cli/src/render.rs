@@ -289,20 +289,21 @@ impl<S: Shooter> Tracer<'_, S> {
 }
 
 /// Linear colours of a camera's pixel centres, row 0 on top, traced with
-/// `threads` threads; with the threads' statistics and counts summed.
+/// `threads` threads; with the threads' statistics and counts summed. A
+/// message when the image's memory cannot be had.
 pub fn render_colors<S: Shooter>(
     t: &Tracer<S>,
     cam: &Camera,
     threads: usize,
     progress: bool,
-) -> (Vec<Vec3>, TraceStats, RayCounts) {
+) -> Result<(Vec<Vec3>, TraceStats, RayCounts), String> {
     let pb = crate::bench::progress(cam.height as usize, progress);
     pb.set_message("rows");
     let (w, h) = (cam.width as usize, cam.height as usize);
     let basis = cam.basis();
     let t_min = eye_t_min(t.mesh, t.rules);
     let next = AtomicUsize::new(0);
-    let mut image = vec![Vec3::ZERO; w * h];
+    let mut image = crate::budget::try_vec(&format!("a {w}x{h} image"), w * h, Vec3::ZERO)?;
     let rows: Vec<std::sync::Mutex<&mut [Vec3]>> =
         image.chunks_mut(w).map(std::sync::Mutex::new).collect();
     let (mut stats, mut counts) = (TraceStats::default(), RayCounts::default());
@@ -335,7 +336,7 @@ pub fn render_colors<S: Shooter>(
     });
     pb.finish_and_clear();
     drop(rows);
-    (image, stats, counts)
+    Ok((image, stats, counts))
 }
 
 /// Where `rules` start eye rays: the scene's hither distance or the eye.
@@ -361,14 +362,18 @@ pub fn to_rgb8(c: Vec3) -> [u8; 3] {
 }
 
 /// Renders the scene's camera with `threads` threads: RGB bytes (row 0 on
-/// top), statistics and counts.
+/// top), statistics and counts; a message when the memory cannot be had.
 pub fn render<S: Shooter>(
     t: &Tracer<S>,
     threads: usize,
     progress: bool,
-) -> (Vec<u8>, TraceStats, RayCounts) {
-    let (colors, st, counts) = render_colors(t, &t.mesh.camera, threads, progress);
-    (colors.into_iter().flat_map(to_rgb8).collect(), st, counts)
+) -> Result<(Vec<u8>, TraceStats, RayCounts), String> {
+    let (colors, st, counts) = render_colors(t, &t.mesh.camera, threads, progress)?;
+    let mut rgb = crate::budget::try_vec("an RGB image", colors.len() * 3, 0u8)?;
+    for (px, c) in rgb.chunks_exact_mut(3).zip(colors) {
+        px.copy_from_slice(&to_rgb8(c));
+    }
+    Ok((rgb, st, counts))
 }
 
 /// An image file format, chosen by the file's extension.
@@ -432,7 +437,7 @@ pub struct Job<'a> {
 }
 
 impl crate::built::Visit for Job<'_> {
-    type Out = (Vec<u8>, u64, f64);
+    type Out = Result<(Vec<u8>, u64, f64), String>;
     fn visit<S: Shooter>(self, shooter: &S) -> Self::Out {
         let tracer = Tracer {
             mesh: self.mesh,
@@ -441,7 +446,7 @@ impl crate::built::Visit for Job<'_> {
             rules: Rules::WHITTED,
         };
         let t = std::time::Instant::now();
-        let (rgb, st, _) = render(&tracer, self.threads, true);
-        (rgb, st.rays, t.elapsed().as_secs_f64())
+        let (rgb, st, _) = render(&tracer, self.threads, true)?;
+        Ok((rgb, st.rays, t.elapsed().as_secs_f64()))
     }
 }

@@ -3,6 +3,7 @@
 //! large is allocated.
 
 use crate::budget;
+use coray_scenes::nff::shown;
 use coray_scenes::spd::{self, Options};
 use coray_scenes::{NffScene, SceneMesh};
 
@@ -42,7 +43,7 @@ pub fn load(spec: &str, opts: &Options) -> Result<SceneData, String> {
                 n,
                 Some(
                     s.parse::<u32>()
-                        .map_err(|_| format!("`{s}` is not a size factor"))?,
+                        .map_err(|_| format!("`{}` is not a size factor", shown(s)))?,
                 ),
             ),
             None => (rest, None),
@@ -55,7 +56,9 @@ pub fn load(spec: &str, opts: &Options) -> Result<SceneData, String> {
                 .parse::<usize>()
                 .ok()
                 .filter(|n| (1..=MAX_RANDOM).contains(n))
-                .ok_or(format!("`{a}` is not a triangle count (1 to {MAX_RANDOM})"))?,
+                .ok_or_else(|| {
+                    format!("`{}` is not a triangle count (1 to {MAX_RANDOM})", shown(a))
+                })?,
         };
         let params = coray::kd::KdParams::auto();
         let per = coray_scenes::random::BYTES_PER_TRIANGLE as f64;
@@ -65,12 +68,12 @@ pub fn load(spec: &str, opts: &Options) -> Result<SceneData, String> {
     } else if coray_scenes::mesh_file::MeshFormat::of(std::path::Path::new(spec)).is_some() {
         coray_scenes::mesh_file::read_mesh(std::path::Path::new(spec))?
     } else {
-        let text = std::fs::read_to_string(spec).map_err(|e| format!("{spec}: {e}"))?;
-        let nff = NffScene::parse(&text).map_err(|e| format!("{spec}:{e}"))?;
+        let text = std::fs::read_to_string(spec).map_err(|e| format!("{}: {e}", shown(spec)))?;
+        let nff = NffScene::parse(&text).map_err(|e| format!("{}:{e}", shown(spec)))?;
         SceneMesh::from_nff(&nff)
     };
     if let Some(why) = mesh.camera.fault() {
-        return Err(format!("{spec}: the camera cannot be used: {why}"));
+        return Err(format!("{}: the camera cannot be used: {why}", shown(spec)));
     }
     Ok(SceneData {
         name: spec.to_string(),

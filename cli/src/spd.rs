@@ -86,18 +86,18 @@ pub struct Job<'a> {
 }
 
 impl crate::built::Visit for Job<'_> {
-    type Out = Outcome;
-    fn visit<S: Shooter>(self, shooter: &S) -> Outcome {
+    type Out = Result<Outcome, String>;
+    fn visit<S: Shooter>(self, shooter: &S) -> Self::Out {
         let t = std::time::Instant::now();
         let tr = tracer(self.mesh, shooter);
         let (corners, stats, counts) =
-            render::render_colors(&tr, &self.mesh.camera, self.threads, self.progress);
-        Outcome {
+            render::render_colors(&tr, &self.mesh.camera, self.threads, self.progress)?;
+        Ok(Outcome {
             corners,
             stats,
             counts,
             secs: t.elapsed().as_secs_f64(),
-        }
+        })
     }
 }
 
@@ -304,6 +304,7 @@ mod tests {
             threads,
             progress: false,
         })
+        .unwrap()
         .counts
     }
 

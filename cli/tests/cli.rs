@@ -597,11 +597,32 @@ fn bad_inputs_get_a_message_and_status_2() {
             &["bench", "--table", "lcts", "--methods", "kd"],
             "other tables have their methods",
         ),
+        // Audit 55.7: the PNG writer answered "Zero width not allowed".
+        (
+            &["render", "spd:tetra:1", "--spd", "--res", "0"],
+            "1 to 32767 pixels a side",
+        ),
     ];
     for (args, want) in cases {
         let (code, out, err) = coray(args, &d);
         assert_eq!(code, 2, "{args:?}: {out}{err}");
         assert!(err.contains(want), "{args:?}: {err}");
+    }
+    // Audit 55.7: a hostile token was echoed whole. Every message cuts
+    // it to 80 characters and says how long it was.
+    let long = "q".repeat(100_000);
+    for args in [
+        vec!["render", "--accel", &long],
+        vec!["render", "--preset", &long],
+        vec!["render", "--res", &long],
+        vec!["stats", &long],
+        vec!["stats", &format!("spd:{long}")],
+        vec!["stats", &format!("random:{long}")],
+    ] {
+        let (code, out, err) = coray(&args, &d);
+        assert_eq!(code, 2, "{out}{}", &err[..err.len().min(300)]);
+        assert!(err.len() < 1000, "{} bytes: {}", err.len(), &err[..300]);
+        assert!(err.contains("(100000 bytes)"), "{err}");
     }
     let ppm = coray(&["render", "spd:tetra:1", "--res", "8", "-o", "t.ppm"], &d);
     assert_eq!(ppm.0, 0, "{}", ppm.2);
@@ -840,5 +861,33 @@ fn speed_table_has_the_c_abi_rows_and_no_mismatch() {
                 );
             }
         }
+    }
+}
+
+/// Audit 55.7: under `ulimit -v` the budget read MemAvailable only, so
+/// the command planned memory the process could not have and aborted on
+/// a failed allocation. The budget is now the least of the machine's, the
+/// address-space limit's and the control group's memory, and images are
+/// allocated fallibly: a message and status 2.
+#[test]
+fn address_space_limits_are_budgeted() {
+    let d = tmp("ulimit");
+    let bin = env!("CARGO_BIN_EXE_coray");
+    for args in [
+        "render spd:balls --res 32768x32768 -o big.png",
+        "render random:30000000 --res 64x64 -o r.png",
+    ] {
+        let out = Command::new("sh")
+            .arg("-c")
+            .arg(format!("ulimit -v 8000000 && exec {bin} {args}"))
+            .current_dir(&d)
+            .output()
+            .expect("run sh");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args}: {err}");
+        assert!(
+            err.contains("needs") && err.contains("ulimit"),
+            "{args}: {err}"
+        );
     }
 }

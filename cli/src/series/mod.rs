@@ -174,8 +174,8 @@ struct TimeRender<'a> {
 }
 
 impl Visit for TimeRender<'_> {
-    type Out = (f64, u64, u64);
-    fn visit<S: Shooter>(self, shooter: &S) -> (f64, u64, u64) {
+    type Out = Result<(f64, u64, u64), String>;
+    fn visit<S: Shooter>(self, shooter: &S) -> Self::Out {
         let (mut best, mut rays, mut secondary) = (f64::INFINITY, 0, 0);
         for _ in 0..self.repeat.max(1) {
             let tracer = Tracer {
@@ -185,12 +185,12 @@ impl Visit for TimeRender<'_> {
                 rules: render::Rules::WHITTED,
             };
             let t = Instant::now();
-            let (_, st, counts) = render::render(&tracer, 1, false);
+            let (_, st, counts) = render::render(&tracer, 1, false)?;
             best = best.min(t.elapsed().as_secs_f64());
             rays = st.rays;
             secondary = counts.secondary_rays();
         }
-        (best, rays, secondary)
+        Ok((best, rays, secondary))
     }
 }
 
@@ -282,7 +282,7 @@ pub fn run(
                 let (render_s, render_rays, secondary) = built.visit(TimeRender {
                     s: &s,
                     repeat: set.repeat,
-                });
+                })?;
                 out.push(Point {
                     ladder: l.name,
                     size,
