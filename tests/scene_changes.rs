@@ -225,11 +225,13 @@ fn a_projection_hierarchy_refuses_a_changed_scene_or_answers_as_over_it() {
     }
 }
 
-/// The wide hierarchy and every static BVH built over `s`, each as its
-/// `validate` over a scene given later.
-fn validators(s: &Scene) -> Vec<(String, Box<dyn Fn(Scene) -> bool>)> {
+/// A built structure's `validate` over a scene given later.
+type Validator = Box<dyn Fn(Scene) -> bool>;
+
+/// The wide hierarchy and every static BVH built over `s`.
+fn validators(s: &Scene) -> Vec<(String, Validator)> {
     let wide = OwnedWide::new(s, 8).unwrap();
-    let mut v: Vec<(String, Box<dyn Fn(Scene) -> bool>)> = vec![(
+    let mut v: Vec<(String, Validator)> = vec![(
         "wide".into(),
         Box::new(move |s: Scene| wide.view(s).is_ok_and(|w| w.validate().is_ok())),
     )];
