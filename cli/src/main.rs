@@ -19,6 +19,7 @@ mod series;
 mod shoot;
 mod spd;
 mod stats;
+mod summary;
 
 use bench::Settings;
 use clap::{Parser, Subcommand};
@@ -166,6 +167,13 @@ enum Command {
         /// Print one JSON object.
         #[arg(long)]
         json: bool,
+    },
+    /// The README's results table from a speed table (`coray bench --table
+    /// speed` output, as docs/speed-1024.txt).
+    Summary {
+        /// The speed table file.
+        #[arg(default_value = "docs/speed-1024.txt")]
+        file: PathBuf,
     },
     /// Writes a scene as C arrays in CorayScene's layout (for firmware
     /// without a file system; embedded/ is built with one).
@@ -575,6 +583,12 @@ fn run(command: Command, floor_split: u32) -> Result<i32, String> {
                 s.mesh.counts.objects(),
                 output.display()
             );
+            Ok(0)
+        }
+        Command::Summary { file } => {
+            let text =
+                std::fs::read_to_string(&file).map_err(|e| format!("{}: {e}", file.display()))?;
+            print!("{}", summary::summary(&text)?);
             Ok(0)
         }
         Command::Stats { scene, json } => {

@@ -891,3 +891,20 @@ fn address_space_limits_are_budgeted() {
         );
     }
 }
+
+/// The README's results table is `coray summary docs/speed-1024.txt`, and
+/// that file begins with the command that wrote it: no figure copied by
+/// hand.
+#[test]
+fn readme_results_are_the_summary_of_the_speed_table() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
+    let (code, table, err) = coray(&["summary", "docs/speed-1024.txt"], &root);
+    assert_eq!(code, 0, "{err}");
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    assert!(
+        readme.contains(&table),
+        "README.md's results differ from `coray summary docs/speed-1024.txt`:\n{table}"
+    );
+    let speed = std::fs::read_to_string(root.join("docs/speed-1024.txt")).unwrap();
+    assert!(speed.starts_with("$ coray bench --table speed"));
+}
