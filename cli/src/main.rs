@@ -519,6 +519,9 @@ fn run(command: Command, floor_split: u32) -> Result<i32, String> {
             threads,
         } => {
             render::ImageFormat::for_path(&diff)?;
+            // The arguments first, then whether this build has Embree: a
+            // bad resolution gets the same answer in every build.
+            budget::check_side("--res", res)?;
             Method::Embree(method::EmbreeCall::One).available()?;
             let threads = threads_or_all(threads)?;
             let s = load_square(&scene, res, &opts)?;

@@ -57,6 +57,7 @@ fn expect_ok(name: &str, out: &str) {
 }
 
 #[test]
+#[ignore = "runs C programs under ASan, UBSan, valgrind and helgrind: the full tier (scripts/test.sh) runs it"]
 fn c_programs_under_address_and_undefined_sanitizers() {
     let flags = [
         "-fsanitize=address,undefined",
@@ -97,6 +98,7 @@ fn valgrind(tool: &str) -> Command {
 }
 
 #[test]
+#[ignore = "runs C programs under ASan, UBSan, valgrind and helgrind: the full tier (scripts/test.sh) runs it"]
 fn c_programs_under_valgrind_memcheck() {
     // (no_malloc counts calls to its own malloc, which valgrind replaces.)
     for name in PROGRAMS.iter().filter(|n| **n != "threads") {
@@ -112,6 +114,7 @@ fn c_programs_under_valgrind_memcheck() {
 }
 
 #[test]
+#[ignore = "runs C programs under ASan, UBSan, valgrind and helgrind: the full tier (scripts/test.sh) runs it"]
 fn threads_under_helgrind() {
     for name in ["threads", "build_jobs"] {
         let exe = build_with(name, "hg", &["-O1"]);
