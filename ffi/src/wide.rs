@@ -1,5 +1,6 @@
-//! `coray_wide_*`: the wide (4-ary) hierarchy for incoherent rays, the
-//! binary SAH hierarchy collapsed into nodes of four boxes tested at once:
+//! `coray_wide_*`: the wide (8-ary) hierarchy for triangle meshes and
+//! incoherent rays, the binary SAH hierarchy collapsed into nodes of eight
+//! boxes tested at once:
 //! parameters, requirements, build, open, info, validate, intersect,
 //! occluded. Hits are the kd-tree's bit for bit.
 
