@@ -1,4 +1,4 @@
-// coray from C++: arenas owned by RAII types, a tree shared by std::threads
+// coray from C++ through coray.hpp: a tree shared by std::threads
 // (each with its own traversal stack), primary rays traced as arrays in
 // packets of 8 (CORAY_TRAVERSAL_PACKETS). A procedural scene: a floor and a
 // grid of balls. Writes a PPM.
@@ -7,7 +7,7 @@
 //
 // Build against the installed library:
 //   c++ -std=c++17 render.cpp $(pkg-config --cflags --libs coray) -pthread -o render_cpp
-#include <coray.h>
+#include <coray.hpp>
 
 #include <atomic>
 #include <cmath>
@@ -21,55 +21,14 @@
 
 namespace {
 
-// Throws on any status but OK, with coray's description of it.
-void check(CorayStatus s, const char *what) {
-    if (s != CORAY_STATUS_OK) throw std::runtime_error(std::string(what) + ": " + coray_status_str(s));
-}
-
-// CORAY_ARENA_ALIGN-aligned memory that frees itself.
-class Arena {
-  public:
-    explicit Arena(size_t bytes) : bytes_(bytes) {
-        void *p = nullptr;
-        if (posix_memalign(&p, CORAY_ARENA_ALIGN, bytes ? bytes : 16) != 0) throw std::bad_alloc();
-        p_.reset(p);
-    }
-    void *data() const { return p_.get(); }
-    size_t size() const { return bytes_; }
-
-  private:
-    struct Free {
-        void operator()(void *p) const { std::free(p); }
-    };
-    std::unique_ptr<void, Free> p_;
-    size_t bytes_;
-};
-
-// A built kd-tree over a scene: the arena it lives in and its handle. The
-// scene's arrays must outlive it (the tree holds primitive indices).
-class KdTree {
-  public:
-    KdTree(const CorayScene &scene, CorayKdPreset preset) : arena_(size(scene, preset)) {
-        CorayKdParams params = coray_kdtree_params_default(preset);
-        CorayRequirements req = coray_requirements_default();
-        check(coray_kdtree_requirements(count(scene), &params, &req), "requirements");
-        Arena scratch(req.scratch_bytes); // free again when the build returns
-        check(coray_kdtree_build(&scene, &params, arena_.data(), arena_.size(), scratch.data(), scratch.size(), nullptr),
-              "build");
-        check(coray_kdtree_open(arena_.data(), arena_.size(), &scene, &handle_), "open");
-    }
-    const CorayKdTree *handle() const { return &handle_; }
-
-  private:
-    static size_t count(const CorayScene &s) { return s.triangle_count + s.sphere_count + s.cone_count; }
-    static size_t size(const CorayScene &s, CorayKdPreset preset) {
-        CorayKdParams params = coray_kdtree_params_default(preset);
-        CorayRequirements req = coray_requirements_default();
-        check(coray_kdtree_requirements(count(s), &params, &req), "requirements");
-        return req.arena_bytes;
-    }
-    Arena arena_;
-    CorayKdTree handle_{};
+struct Vec {
+    float x, y, z;
+    Vec operator+(Vec o) const { return {x + o.x, y + o.y, z + o.z}; }
+    Vec operator-(Vec o) const { return {x - o.x, y - o.y, z - o.z}; }
+    Vec operator*(float s) const { return {x * s, y * s, z * s}; }
+    float dot(Vec o) const { return x * o.x + y * o.y + z * o.z; }
+    Vec cross(Vec o) const { return {y * o.z - z * o.y, z * o.x - x * o.z, x * o.y - y * o.x}; }
+    Vec unit() const { return *this * (1.0f / std::sqrt(dot(*this))); }
 };
 
 } // namespace
@@ -85,60 +44,47 @@ int main(int argc, char **argv) try {
         throw std::runtime_error("SIZE must be a multiple of 4 from 8 to 8192, THREADS 1 to 256");
 
     // A 20 x 20 floor and a 7 x 7 grid of balls.
-    std::vector<float> vertices = {-10, 0, -10, 10, 0, -10, 10, 0, 10, -10, 0, 10};
-    std::vector<uint32_t> indices = {0, 1, 2, 0, 2, 3};
-    std::vector<float> spheres;
+    coray::Scene scene;
+    scene.add_quad(scene.add_vertex(-10, 0, -10), scene.add_vertex(-10, 0, 10), scene.add_vertex(10, 0, 10),
+                   scene.add_vertex(10, 0, -10));
     for (int i = 0; i < 7; i++)
-        for (int k = 0; k < 7; k++) spheres.insert(spheres.end(), {float(i - 3) * 2.2f, 1.0f, float(k - 3) * 2.2f, 0.9f});
-    CorayScene scene = coray_scene_default();
-    scene.vertices = vertices.data();
-    scene.vertex_count = vertices.size() / 3;
-    scene.indices = indices.data();
-    scene.triangle_count = indices.size() / 3;
-    scene.spheres = spheres.data();
-    scene.sphere_count = spheres.size() / 4;
-    const KdTree tree(scene, CORAY_KD_PRESET_AUTO);
+        for (int k = 0; k < 7; k++) scene.add_sphere(float(i - 3) * 2.2f, 1.0f, float(k - 3) * 2.2f, 0.9f);
+    const size_t prims = scene.prim_count();
+    const coray::KdTree tree = coray::KdTree::build(std::move(scene));
 
-    // Rays of 4 x 2 pixel tiles in a row: packets of 8 that move alike.
-    const float eye[3] = {0, 9, 16}, light[3] = {6, 14, 8};
+    // A pinhole camera with an orthonormal basis (so balls come out round):
+    // rays of 4 x 2 pixel tiles in a row, packets of 8 that move alike.
+    const Vec eye{0, 9, 16}, at{0, 0, 0}, light{6, 14, 8};
+    const Vec forward = (at - eye).unit(), right = forward.cross(Vec{0, 1, 0}).unit(), up = right.cross(forward);
+    const float half = std::tan(0.5f * 50.0f * 3.14159265f / 180.0f); // a 50-degree field of view
     auto camera_ray = [&](int x, int y) {
-        CorayRay r{};
-        const float sx = (2.0f * (x + 0.5f) / size - 1.0f) * 0.5f, sy = (1.0f - 2.0f * (y + 0.5f) / size) * 0.5f;
-        const float d[3] = {sx, -0.45f + sy * 0.9f, -0.9f + sy * 0.45f};
-        for (int k = 0; k < 3; k++) {
-            r.org[k] = eye[k];
-            r.dir[k] = d[k];
-        }
-        r.tfar = INFINITY;
-        return r;
+        const float sx = (2.0f * (x + 0.5f) / size - 1.0f) * half, sy = (1.0f - 2.0f * (y + 0.5f) / size) * half;
+        const Vec d = forward + right * sx + up * sy;
+        return CorayRay{{eye.x, eye.y, eye.z}, 0.0f, {d.x, d.y, d.z}, INFINITY};
     };
     std::vector<unsigned char> image(size_t(size) * size * 3);
     std::atomic<int> next_band{0};
     auto worker = [&] {
-        Arena stack(CORAY_KDTREE_STACK_BYTES); // one stack per thread
+        coray::Arena stack = coray::KdTree::stack(); // one stack per thread
         std::vector<CorayRay> rays(size_t(size) * 2), shadows(rays.size());
         std::vector<CorayHit> hits(rays.size());
         std::vector<uint8_t> blocked(rays.size());
         for (int band; (band = next_band++) < size / 2;) {
             for (int bx = 0; bx < size; bx += 4)
                 for (int t = 0; t < 8; t++) rays[size_t(bx) * 2 + t] = camera_ray(bx + t % 4, 2 * band + t / 4);
-            check(coray_kdtree_intersect(tree.handle(), CORAY_TRAVERSAL_PACKETS, rays.data(), hits.data(), rays.size(),
-                                         stack.data(), stack.size(), nullptr),
-                  "intersect");
+            tree.intersect(CORAY_TRAVERSAL_PACKETS, rays.data(), hits.data(), rays.size(), stack);
             for (size_t i = 0; i < rays.size(); i++) {
                 CorayRay &s = shadows[i];
                 s = CorayRay{};
                 const float t = hits[i].geom_id == CORAY_INVALID_ID ? 0.0f : hits[i].t;
                 for (int k = 0; k < 3; k++) {
                     s.org[k] = rays[i].org[k] + t * rays[i].dir[k];
-                    s.dir[k] = light[k] - s.org[k];
+                    s.dir[k] = (&light.x)[k] - s.org[k];
                 }
                 s.tnear = 1e-4f;
                 s.tfar = hits[i].geom_id == CORAY_INVALID_ID ? -1.0f : 1.0f; // a miss casts no shadow ray
             }
-            check(coray_kdtree_occluded(tree.handle(), CORAY_TRAVERSAL_PACKETS, shadows.data(), blocked.data(),
-                                        shadows.size(), stack.data(), stack.size(), nullptr),
-                  "occluded");
+            tree.occluded(CORAY_TRAVERSAL_PACKETS, shadows.data(), blocked.data(), shadows.size(), stack);
             for (size_t i = 0; i < rays.size(); i++) {
                 const int x = int(i / 8) * 4 + int(i % 4), y = 2 * band + int(i % 8) / 4;
                 const CorayHit &h = hits[i];
@@ -165,8 +111,7 @@ int main(int argc, char **argv) try {
     if (!out) throw std::runtime_error(std::string(argv[1]) + ": cannot write");
     std::fprintf(out.get(), "P6\n%d %d\n255\n", size, size);
     std::fwrite(image.data(), 1, image.size(), out.get());
-    std::printf("%zu primitives, %dx%d in packets of 8 on %d threads -> %s\n", spheres.size() / 4 + 2, size, size, threads,
-                argv[1]);
+    std::printf("%zu primitives, %dx%d in packets of 8 on %d threads -> %s\n", prims, size, size, threads, argv[1]);
     return 0;
 } catch (const std::exception &e) {
     std::fprintf(stderr, "render_cpp: %s\n", e.what());

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Installs coray's C library into PREFIX (default /usr/local):
-#   include/coray.h
+#   include/coray.h, include/coray.hpp (the C++17 layer)
 #   lib/libcoray.a, lib/libcoray.so.X.Y.Z (SONAME libcoray.so.X) and links
 #   lib/pkgconfig/coray.pc            pkg-config --cflags --libs coray
 #   lib/cmake/coray/corayConfig.cmake find_package(coray): coray::coray, coray::coray_static
@@ -22,6 +22,7 @@ libdir="$prefix/lib"
 incdir="$prefix/include"
 install -d "$libdir/pkgconfig" "$libdir/cmake/coray" "$incdir"
 install -m 644 include/coray.h "$incdir/coray.h"
+install -m 644 include/coray.hpp "$incdir/coray.hpp"
 install -m 644 "$out/libcoray_ffi.a" "$libdir/libcoray.a"
 strip --strip-debug "$libdir/libcoray.a" 2>/dev/null || true
 install -m 755 "$out/libcoray_ffi.so" "$libdir/libcoray.so.$version"

@@ -56,6 +56,31 @@ fn header_compiles_as_cpp() {
     run_checked(&mut cmd, "C++ compile of coray.h");
 }
 
+/// include/coray.hpp under C++17 and C++20 with every warning an error,
+/// linked with the library and run (c_tests/cpp_wrapper.cpp).
+#[test]
+#[ignore = "compiles and runs C programs: the full tier (scripts/test.sh) runs it"]
+fn cpp_wrappers_build_and_pass_under_cpp17_and_cpp20() {
+    let lib = deps_dir().join("libcoray_ffi.a");
+    for std in ["c++17", "c++20"] {
+        let exe = deps_dir().join(format!("../c_tests/cpp_wrapper_{std}"));
+        std::fs::create_dir_all(exe.parent().unwrap()).unwrap();
+        let mut cmd = Command::new("c++");
+        cmd.arg(format!("-std={std}"))
+            .args(["-Wall", "-Wextra", "-Wpedantic", "-Werror", "-O1"])
+            .arg("-I")
+            .arg(root().join("include"))
+            .arg(root().join("c_tests/cpp_wrapper.cpp"))
+            .arg("-o")
+            .arg(&exe)
+            .arg(&lib)
+            .args(["-lpthread", "-ldl", "-lm"]);
+        run_checked(&mut cmd, &format!("c++ -std={std} cpp_wrapper.cpp"));
+        let out = run_checked(&mut Command::new(&exe), "cpp_wrapper");
+        assert!(out.contains("cpp_wrapper: ok"), "{std}: {out}");
+    }
+}
+
 #[test]
 #[ignore = "compiles and runs C programs: the full tier (scripts/test.sh) runs it"]
 fn api_contract() {

@@ -53,6 +53,7 @@ fn install_then_build_the_examples_with_pkg_config_and_cmake() {
     assert!(out.contains("installed in"), "{out}");
     for f in [
         "include/coray.h",
+        "include/coray.hpp",
         "lib/libcoray.a",
         "lib/libcoray.so",
         "lib/libcoray.so.1",
