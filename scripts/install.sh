@@ -23,8 +23,21 @@ incdir="$prefix/include"
 install -d "$libdir/pkgconfig" "$libdir/cmake/coray" "$incdir"
 install -m 644 include/coray.h "$incdir/coray.h"
 install -m 644 include/coray.hpp "$incdir/coray.hpp"
-install -m 644 "$out/libcoray_ffi.a" "$libdir/libcoray.a"
-strip --strip-debug "$libdir/libcoray.a" 2>/dev/null || true
+# The static library exports coray's names only: its objects are linked
+# into one relocatable object whose every other global symbol (Rust's std,
+# compiler builtins) is made local, so that it cannot clash with another
+# Rust static library in the same program. The LLVM bitcode sections are
+# dropped (no linker reads them; nm would try to).
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+nm -g --defined-only "$out/libcoray_ffi.a" 2>/dev/null \
+    | awk 'NF == 3 && $3 ~ /^coray_/ { print $3 }' | sort -u > "$work/keep"
+ld -r --whole-archive "$out/libcoray_ffi.a" -o "$work/coray.o"
+objcopy --remove-section=.llvmbc --remove-section=.llvmcmd \
+    --keep-global-symbols="$work/keep" --strip-debug "$work/coray.o"
+rm -f "$libdir/libcoray.a"
+ar rcs "$libdir/libcoray.a" "$work/coray.o"
+chmod 644 "$libdir/libcoray.a"
 install -m 755 "$out/libcoray_ffi.so" "$libdir/libcoray.so.$version"
 ln -sf "libcoray.so.$version" "$libdir/libcoray.so.$major"
 ln -sf "libcoray.so.$major" "$libdir/libcoray.so"

@@ -63,6 +63,26 @@ fn install_then_build_the_examples_with_pkg_config_and_cmake() {
     ] {
         assert!(prefix.join(f).exists(), "{f} not installed");
     }
+    // The static library exports coray's names only, each one the header
+    // declares (before: about 1,190 global symbols, Rust's std among them).
+    let nm = Command::new("nm")
+        .args(["-g", "--defined-only"])
+        .arg(prefix.join("lib/libcoray.a"))
+        .output()
+        .unwrap();
+    assert!(nm.status.success(), "{}", String::from_utf8_lossy(&nm.stderr));
+    let header = std::fs::read_to_string(root().join("include/coray.h")).unwrap();
+    let globals: Vec<String> = String::from_utf8_lossy(&nm.stdout)
+        .lines()
+        .filter_map(|l| l.split_whitespace().nth(2).map(str::to_string))
+        .collect();
+    assert!(globals.len() >= 60, "{} global symbols", globals.len());
+    for g in &globals {
+        assert!(
+            g.starts_with("coray_") && header.contains(&format!("{g}(")),
+            "libcoray.a exports {g}, not a function of coray.h"
+        );
+    }
     let soname = Command::new("readelf")
         .args(["-d"])
         .arg(prefix.join("lib/libcoray.so.1"))
