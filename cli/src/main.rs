@@ -176,16 +176,21 @@ enum Command {
         file: PathBuf,
     },
     /// Writes a scene as C arrays in CorayScene's layout (for firmware
-    /// without a file system; embedded/ is built with one).
+    /// without a file system; embedded/ is built with one), or as NFF.
     Export {
         /// Scene: an NFF file, a mesh (`.obj`, `.ply`), `spd:NAME[:SIZE]` or `random[:N]`.
         scene: String,
-        /// The C header to write.
-        #[arg(short, long, default_value = "scene.h")]
-        output: PathBuf,
+        /// The file to write (default scene.h, or scene.nff with --nff).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
         /// Prefix of the C names: PREFIX_vertices, PREFIX_SPHERE_COUNT, ...
         #[arg(long, default_value = "scene")]
         prefix: String,
+        /// Write NFF instead of C: the scene's view, lights, materials and
+        /// primitives (triangles as `p 3`), which `coray` and
+        /// examples/render.c read back.
+        #[arg(long)]
+        nff: bool,
     },
 }
 
@@ -567,7 +572,22 @@ fn run(command: Command, floor_split: u32) -> Result<i32, String> {
             scene,
             output,
             prefix,
+            nff,
         } => {
+            if nff {
+                let output = output.unwrap_or_else(|| PathBuf::from("scene.nff"));
+                let s = scene::load(&scene, &opts)?;
+                std::fs::write(&output, s.mesh.to_nff().to_nff())
+                    .map_err(|e| format!("{}: {e}", output.display()))?;
+                println!(
+                    "{}: {} objects -> {}",
+                    shown(&scene),
+                    s.mesh.counts.objects(),
+                    output.display()
+                );
+                return Ok(0);
+            }
+            let output = output.unwrap_or_else(|| PathBuf::from("scene.h"));
             let ident = |c: char| c == '_' || c.is_ascii_alphanumeric();
             if prefix.is_empty()
                 || prefix.starts_with(|c: char| c.is_ascii_digit())

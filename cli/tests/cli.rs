@@ -908,3 +908,29 @@ fn readme_results_are_the_summary_of_the_speed_table() {
     let speed = std::fs::read_to_string(root.join("docs/speed-1024.txt")).unwrap();
     assert!(speed.starts_with("$ coray bench --table speed"));
 }
+
+/// `coray export --nff`: any scene (SPD, a mesh file, random) as NFF that
+/// renders as the scene does.
+#[test]
+fn exported_nff_renders_as_the_scene() {
+    let d = tmp("export-nff");
+    let obj = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nf 1 2 3 4\nf 1 2 5\n";
+    std::fs::write(d.join("quad.obj"), obj).unwrap();
+    for scene in ["spd:tetra:2", "spd:balls:1", "quad.obj", "random:200"] {
+        let (code, _, err) = coray(&["export", "--nff", scene, "-o", "x.nff"], &d);
+        assert_eq!(code, 0, "{scene}: {err}");
+        let render = |s: &str, out: &str| {
+            let (code, _, err) = coray(
+                &["render", s, "--res", "48x32", "-o", out, "--threads", "1"],
+                &d,
+            );
+            assert_eq!(code, 0, "{s}: {err}");
+            std::fs::read(d.join(out)).unwrap()
+        };
+        assert_eq!(
+            render(scene, "a.ppm"),
+            render("x.nff", "b.ppm"),
+            "{scene}: the exported NFF renders otherwise"
+        );
+    }
+}

@@ -190,6 +190,97 @@ impl SceneMesh {
         m
     }
 
+    /// The scene as NFF: its view, background, lights (white ones without a
+    /// colour), every triangle a `p 3` (`pp 3` where its corners carry
+    /// normals), spheres and cones, each after an `f` whenever its material
+    /// differs from the one before. [`SceneMesh::from_nff`] of it gives the
+    /// same primitives in the same order, camera, lights and materials
+    /// (vertices shared between triangles come back one per corner).
+    pub fn to_nff(&self) -> NffScene {
+        let c = &self.camera;
+        let mut nff = NffScene {
+            view: Some(View {
+                from: c.from.to_array(),
+                at: c.at.to_array(),
+                up: c.up.to_array(),
+                angle: c.angle_deg,
+                hither: self.hither,
+                resolution: [c.width, c.height],
+            }),
+            background: Some(self.background.to_array()),
+            lights: self
+                .lights
+                .iter()
+                .map(|(pos, color)| crate::nff::Light {
+                    pos: pos.to_array(),
+                    color: (*color != Vec3::ONE).then(|| color.to_array()),
+                })
+                .collect(),
+            ..NffScene::default()
+        };
+        let mut current: Option<u32> = None;
+        let mut material_of = |nff: &mut NffScene, prim: usize| {
+            let m = self.prim_material.get(prim).copied().unwrap_or(0);
+            if current != Some(m) {
+                let mat = self
+                    .materials
+                    .get(m as usize)
+                    .copied()
+                    .unwrap_or(DEFAULT_MATERIAL);
+                // NFF's default material is in force only before any `f`.
+                if current.is_some() || mat != DEFAULT_MATERIAL {
+                    nff.materials.push(mat);
+                }
+                current = Some(m);
+            }
+            nff.materials.len().checked_sub(1)
+        };
+        for (i, t) in self.triangles.iter().enumerate() {
+            let material = material_of(&mut nff, i);
+            let at = |k: usize| {
+                self.vertices
+                    .get(t[k] as usize)
+                    .copied()
+                    .unwrap_or([f32::NAN; 3])
+            };
+            let with_normals = t
+                .iter()
+                .any(|&v| self.has_normal.get(v as usize) == Some(&true));
+            nff.objects.push(Object::Polygon {
+                vertices: vec![at(0), at(1), at(2)],
+                normals: with_normals.then(|| {
+                    t.iter()
+                        .map(|&v| self.normals.get(v as usize).copied().unwrap_or_default())
+                        .collect()
+                }),
+                material,
+            });
+        }
+        let nt = self.triangles.len();
+        for (i, s) in self.spheres.iter().enumerate() {
+            let material = material_of(&mut nff, nt + i);
+            nff.objects.push(Object::Sphere {
+                center: s.center,
+                radius: s.radius,
+                inside_visible: false,
+                material,
+            });
+        }
+        let ns = nt + self.spheres.len();
+        for (i, k) in self.cones.iter().enumerate() {
+            let material = material_of(&mut nff, ns + i);
+            nff.objects.push(Object::Cone {
+                base: k.base,
+                base_radius: k.base_radius,
+                apex: k.apex,
+                apex_radius: k.apex_radius,
+                inside_visible: false,
+                material,
+            });
+        }
+        nff
+    }
+
     /// The arrays as a coray scene.
     pub fn scene(&self) -> Scene<'_> {
         Scene {
