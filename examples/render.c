@@ -84,7 +84,11 @@ static int read_nff(const char *path, Nff *s) {
             if (!next_floats(f, s->background, 3)) return 0;
         } else if (!strcmp(cmd, "l")) {
             float p[3];
+            char rest[256];
             if (!next_floats(f, p, 3)) return 0;
+            /* An optional colour on the same line (r g b): read past it;
+             * this renderer's lights are white. */
+            if (!fgets(rest, sizeof rest, f)) rest[0] = 0;
             for (int k = 0; k < 3; k++) push_f(&s->lights, p[k]);
         } else if (!strcmp(cmd, "f")) {
             float rest[5];

@@ -70,7 +70,11 @@ fn install_then_build_the_examples_with_pkg_config_and_cmake() {
         .arg(prefix.join("lib/libcoray.a"))
         .output()
         .unwrap();
-    assert!(nm.status.success(), "{}", String::from_utf8_lossy(&nm.stderr));
+    assert!(
+        nm.status.success(),
+        "{}",
+        String::from_utf8_lossy(&nm.stderr)
+    );
     let header = std::fs::read_to_string(root().join("include/coray.h")).unwrap();
     let globals: Vec<String> = String::from_utf8_lossy(&nm.stdout)
         .lines()
@@ -144,6 +148,18 @@ fn install_then_build_the_examples_with_pkg_config_and_cmake() {
         std::fs::read(&b).unwrap(),
         "thread counts and linkage change nothing"
     );
+
+    // The repository's own NFF sample (a light with a colour) renders:
+    // render.c stopped at the colour before.
+    let sample = tmp.join("sample.ppm");
+    sh(
+        Command::new(&stat)
+            .arg(root().join("fuzz/seeds/sample.nff"))
+            .arg(&sample)
+            .arg("1"),
+        "render sample.nff",
+    );
+    assert!(std::fs::read(&sample).unwrap().starts_with(b"P6"));
 
     // CMake: find_package(coray) and every example.
     let build = tmp.join("cmake-build");
