@@ -802,7 +802,9 @@ enum CorayStatus coray_bvh_info(const struct CorayBvh *bvh, struct CorayBvhInfo 
 // Checks every structural invariant of the hierarchy against its scene,
 // in time linear in the hierarchy, never crashing on any bytes: boxes are
 // exact unions, indices in range, counts, depth and reference digest as
-// recorded, and for R-trees the fill rules and free lists.
+// recorded; for the static builders the leaves holding exactly the
+// scene's non-degenerate primitives, for R-trees the fill rules and free
+// lists.
 // `CORAY_STATUS_CORRUPT_ARENA` when anything is wrong. Once it accepts an
 // arena, every call on it gives the results of a clean build. `stack` is
 // the traversal stack (`stack_bytes` of the info); `out` may be NULL.
@@ -1509,8 +1511,10 @@ enum CorayStatus coray_wide_info(const struct CorayWide *wide, struct CorayWideI
 // Checks every structural invariant of the hierarchy against its scene,
 // in time linear in the hierarchy, never crashing on any bytes: a tree
 // in breadth-first order, boxes exact unions, indices in range, counts,
-// depth and reference digest as recorded. `CORAY_STATUS_CORRUPT_ARENA`
-// when anything is wrong. Once it accepts an arena, every call on it
+// depth and reference digest as recorded, and the leaves holding exactly
+// the scene's non-degenerate primitives (a scene changed since the build
+// so that one became degenerate or stopped being so is refused).
+// `CORAY_STATUS_CORRUPT_ARENA` when anything is wrong. Once it accepts an arena, every call on it
 // gives the results of a clean build. `out` may be NULL.
 //
 // Safety: as `coray_wide_info`.

@@ -564,7 +564,9 @@ pub unsafe extern "C" fn coray_bvh_info(
 /// Checks every structural invariant of the hierarchy against its scene,
 /// in time linear in the hierarchy, never crashing on any bytes: boxes are
 /// exact unions, indices in range, counts, depth and reference digest as
-/// recorded, and for R-trees the fill rules and free lists.
+/// recorded; for the static builders the leaves holding exactly the
+/// scene's non-degenerate primitives, for R-trees the fill rules and free
+/// lists.
 /// `CORAY_STATUS_CORRUPT_ARENA` when anything is wrong. Once it accepts an
 /// arena, every call on it gives the results of a clean build. `stack` is
 /// the traversal stack (`stack_bytes` of the info); `out` may be NULL.

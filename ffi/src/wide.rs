@@ -372,8 +372,10 @@ pub unsafe extern "C" fn coray_wide_info(
 /// Checks every structural invariant of the hierarchy against its scene,
 /// in time linear in the hierarchy, never crashing on any bytes: a tree
 /// in breadth-first order, boxes exact unions, indices in range, counts,
-/// depth and reference digest as recorded. `CORAY_STATUS_CORRUPT_ARENA`
-/// when anything is wrong. Once it accepts an arena, every call on it
+/// depth and reference digest as recorded, and the leaves holding exactly
+/// the scene's non-degenerate primitives (a scene changed since the build
+/// so that one became degenerate or stopped being so is refused).
+/// `CORAY_STATUS_CORRUPT_ARENA` when anything is wrong. Once it accepts an arena, every call on it
 /// gives the results of a clean build. `out` may be NULL.
 ///
 /// Safety: as `coray_wide_info`.
