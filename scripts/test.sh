@@ -9,12 +9,15 @@ cd "$(dirname "$0")/.."
 
 # Debian packages the tests need: Embree 3 (the cross-check reference),
 # valgrind (memcheck and helgrind over the C programs), cmake (the
-# installed package's find_package test).
+# installed package's find_package test), Open MPI.
 need=()
 [ -f /usr/include/embree3/rtcore.h ] || need+=(libembree-dev)
 command -v valgrind >/dev/null || need+=(valgrind)
 command -v cmake >/dev/null || need+=(cmake)
 command -v pkg-config >/dev/null || need+=(pkg-config)
+# Open MPI: the render-farm example (examples/trace_mpi.c) on two ranks.
+command -v mpicc >/dev/null || need+=(libopenmpi-dev)
+command -v mpirun >/dev/null || need+=(openmpi-bin)
 if [ ${#need[@]} -gt 0 ]; then
     echo "installing ${need[*]}"
     apt-get update -qq

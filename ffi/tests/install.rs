@@ -217,6 +217,29 @@ fn install_then_build_the_examples_with_pkg_config_and_cmake() {
         &[&saved, &tmp.join("saved.ppm"), Path::new("32")],
     );
     assert!(out.contains("validated"), "{out}");
+    // The MPI example, built by CMake against the installed library, on
+    // two ranks: the one-process image (Open MPI asks root to say so twice).
+    let mpi = Command::new("mpirun")
+        .args(["--oversubscribe", "-n", "2"])
+        .arg(build.join("trace_mpi"))
+        .arg(&saved)
+        .arg(tmp.join("saved-mpi.ppm"))
+        .arg("32")
+        .env("LD_LIBRARY_PATH", &lib)
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .output()
+        .expect("mpirun (scripts/test.sh installs openmpi-bin)");
+    assert!(
+        mpi.status.success(),
+        "{}",
+        String::from_utf8_lossy(&mpi.stderr)
+    );
+    assert_eq!(
+        std::fs::read(tmp.join("saved.ppm")).unwrap(),
+        std::fs::read(tmp.join("saved-mpi.ppm")).unwrap(),
+        "two ranks cast another image"
+    );
     // A damaged copy is refused, never traced: a byte of the tree's header
     // or of its root node (the checksum), or the root node changed and
     // the checksum made again (validate).
