@@ -39,9 +39,15 @@ static int open_saved(const char *path, CoraySaved *saved) {
     return 0;
 }
 
-/* A size x size camera on the diagonal of the tree's box, looking at its
- * centre (the file holds no view). */
-static CorayCamera saved_camera(const CorayKdTreeInfo *info, int size) {
+/* A size x size camera: the view the file was saved with (`coray build`
+ * saves the scene's own; since 1.8), else one on the diagonal of the
+ * tree's box, looking at its centre. */
+static CorayCamera saved_camera(const CoraySaved *saved, const CorayKdTreeInfo *info, int size) {
+    if (saved->has_camera) {
+        CorayCamera cam = saved->camera;
+        cam.width = cam.height = (uint32_t)size;
+        return cam;
+    }
     float c[3], ext = 0;
     for (int k = 0; k < 3; k++) {
         c[k] = 0.5f * (info->bounds_min[k] + info->bounds_max[k]);

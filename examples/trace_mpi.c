@@ -35,7 +35,7 @@ int main(int argc, char **argv) {
     CoraySaved saved;
     CorayKdTreeInfo info = coray_kdtree_info_default();
     int ok = open_saved(argv[1], &saved) == 0 && coray_kdtree_info(&saved.tree, &info) == CORAY_STATUS_OK;
-    CorayCamera cam = saved_camera(&info, size);
+    CorayCamera cam = saved_camera(&saved, &info, size);
 
     /* This rank's rows, cast as one rectangle of the camera's image. */
     int first, rows;

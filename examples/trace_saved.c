@@ -8,7 +8,9 @@
  *   trace_saved scene.coray OUT.ppm [SIZE]
  *
  * File format: ffi/src/saved.rs (a 128-byte header with a checksum, then
- * the arrays); coray_saved_open reads it.
+ * the arrays and the scene's view); coray_saved_open reads it. The image
+ * is cast from the saved view (a file without one: from the diagonal of
+ * the scene's box).
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -26,7 +28,7 @@ int main(int argc, char **argv) {
     const CorayKdTree tree = saved.tree;
     CorayKdTreeInfo info = coray_kdtree_info_default();
     if (coray_kdtree_info(&tree, &info) != CORAY_STATUS_OK) return 1;
-    CorayCamera cam = saved_camera(&info, size);
+    CorayCamera cam = saved_camera(&saved, &info, size);
 
     /* The whole image in one call, in tiles of 4 x 2 rays (the default
      * scheme; CORAY_CAST_SLCTS_2D and the other LCTS schemes need ropes). */

@@ -14,7 +14,7 @@
 #define CORAY_VERSION_MAJOR 1
 
 // Minor version: new functions or struct fields, compatible.
-#define CORAY_VERSION_MINOR 7
+#define CORAY_VERSION_MINOR 8
 
 // Patch version: fixes only.
 #define CORAY_VERSION_PATCH 0
@@ -28,9 +28,10 @@
 // Bytes of the traversal stack every kd-tree trace and cast takes.
 #define CORAY_KDTREE_STACK_BYTES 4608
 
-// Version of the saved-scene file format (`coray build -o`): 2 since 1.7
-// (the checksum, the byte order mark and the file's length).
-#define CORAY_SAVED_VERSION 2
+// Version of the saved-scene file format (`coray build -o`) written: 3
+// since 1.8 (the view); 2 since 1.7 (the checksum, the byte order mark
+// and the file's length), still read.
+#define CORAY_SAVED_VERSION 3
 
 // Bytes of a saved-scene file's header; its arrays follow, 16-byte aligned.
 #define CORAY_SAVED_HEADER_BYTES 128
@@ -561,12 +562,16 @@ typedef struct CoraySaved {
   size_t struct_size;
   // The preset the tree was built with (`CorayKdPreset`).
   CorayKdPreset preset;
-  // Zero.
-  uint32_t reserved;
+  // 1 when the file holds a view (`camera`), else 0 (since 1.8; 1.7
+  // wrote 0 here).
+  uint32_t has_camera;
   // The scene, its arrays pointing into the file.
   struct CorayScene scene;
   // The tree over `scene`, for every `coray_kdtree_*` call.
   struct CorayKdTree tree;
+  // The camera the scene was saved with, when `has_camera` is 1 (its
+  // `struct_size` set; a usable camera, checked). Since 1.8.
+  struct CorayCamera camera;
 } CoraySaved;
 
 // Parameters of a wide hierarchy build. Get them from

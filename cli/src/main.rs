@@ -556,8 +556,13 @@ fn run(command: Command, floor_split: u32) -> Result<i32, String> {
                     &coray::kd::KdParams::auto_with_ropes(),
                 )),
             )?;
-            let bytes = coray_ffi::saved::kdtree_file(&s.mesh.scene(), preset, omit_ropes)
-                .map_err(|st| format!("{scene}: the build failed: {}", status_text(st)))?;
+            let bytes = coray_ffi::saved::kdtree_file(
+                &s.mesh.scene(),
+                Some(&s.mesh.camera),
+                preset,
+                omit_ropes,
+            )
+            .map_err(|st| format!("{scene}: the build failed: {}", status_text(st)))?;
             std::fs::write(&output, &bytes).map_err(|e| format!("{}: {e}", output.display()))?;
             println!(
                 "{}: {} objects, a kd-tree and its scene in {} bytes -> {}",

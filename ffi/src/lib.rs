@@ -50,7 +50,7 @@ pub use wide::*;
 /// Major version of the C ABI: changes only with an incompatible change.
 pub const CORAY_VERSION_MAJOR: u32 = 1;
 /// Minor version: new functions or struct fields, compatible.
-pub const CORAY_VERSION_MINOR: u32 = 7;
+pub const CORAY_VERSION_MINOR: u32 = 8;
 /// Patch version: fixes only.
 pub const CORAY_VERSION_PATCH: u32 = 0;
 

@@ -5,13 +5,13 @@
 //! mapped. `coray_saved_open` checks a file and opens it; the writer
 //! (`kdtree_file`) needs `std`.
 //!
-//! Layout, format version 2 (all offsets from the file's start, every
+//! Layout, format version 3 (all offsets from the file's start, every
 //! array 16-byte aligned, every word in the writer's byte order):
 //!
 //! | bytes | field |
 //! |---|---|
 //! | 0..8 | magic `CORAYSV1` |
-//! | 8..12 | format version (2), `uint32_t` |
+//! | 8..12 | format version (3), `uint32_t` |
 //! | 12..16 | byte order mark `0x01020304`, `uint32_t` |
 //! | 16..20 | the kd-tree's preset (`CorayKdPreset`) |
 //! | 20..24 | zero |
@@ -20,7 +20,13 @@
 //! | 64..96 | offsets of vertices (3 floats each), triangle indices (3 `uint32_t`), spheres (4 floats), cones (8 floats), `uint64_t` each |
 //! | 96..112 | offset and bytes of the kd-tree arena, `uint64_t` each |
 //! | 112..120 | the file's bytes, `uint64_t` |
-//! | 120..128 | zero |
+//! | 120..128 | offset of the view, `uint64_t`; 0 when the file has none |
+//!
+//! The view is the camera the scene was saved with (`coray build` saves
+//! the scene's own): 48 bytes, `from`, `at`, `up` (three floats each), the
+//! angle in degrees (a float), width and height (`uint32_t` each), as
+//! `CorayCamera` holds them after its `struct_size`. Version 2 (1.7) is
+//! version 3 without a view (bytes 120..128 zero): it still opens.
 //!
 //! `coray_saved_open` refuses with `CORAY_STATUS_DAMAGED_FILE` a file whose
 //! magic, version, byte order, length, checksum or array bounds are wrong:
@@ -28,7 +34,9 @@
 //! checksum before a word of the scene or the tree is trusted. It then
 //! opens and validates the tree over the file's scene: a file written
 //! with a tree that does not fit its scene is `CORAY_STATUS_CORRUPT_ARENA`.
-//! Version 1 files (no checksum) are refused: build them again.
+//! A view that is no usable camera (NaN, an eye on the point it looks at)
+//! is damage too. Version 1 files (no checksum) are refused: build them
+//! again.
 
 use crate::*;
 use core::ffi::c_void;
@@ -36,9 +44,10 @@ use xxhash_rust::xxh3::Xxh3;
 
 /// The file's first eight bytes: `CORAYSV1`.
 pub const SAVED_MAGIC: [u8; 8] = *b"CORAYSV1";
-/// Version of the saved-scene file format (`coray build -o`): 2 since 1.7
-/// (the checksum, the byte order mark and the file's length).
-pub const CORAY_SAVED_VERSION: u32 = 2;
+/// Version of the saved-scene file format (`coray build -o`) written: 3
+/// since 1.8 (the view); 2 since 1.7 (the checksum, the byte order mark
+/// and the file's length), still read.
+pub const CORAY_SAVED_VERSION: u32 = 3;
 /// Bytes of a saved-scene file's header; its arrays follow, 16-byte aligned.
 pub const CORAY_SAVED_HEADER_BYTES: usize = 128;
 /// The byte order mark: this word, as the writer stores words.
@@ -46,6 +55,8 @@ pub const CORAY_SAVED_BYTE_ORDER: u32 = 0x0102_0304;
 
 /// Where the header keeps its checksum.
 const CHECKSUM_AT: usize = 24;
+/// Bytes of the view record: nine floats of position, the angle, two sides.
+const VIEW_BYTES: usize = 48;
 
 /// A saved file opened by `coray_saved_open`: the scene, its arrays inside
 /// the file, and the kd-tree over it, opened and validated. Both borrow
@@ -58,12 +69,16 @@ pub struct CoraySaved {
     pub struct_size: usize,
     /// The preset the tree was built with (`CorayKdPreset`).
     pub preset: CorayKdPreset,
-    /// Zero.
-    pub reserved: u32,
+    /// 1 when the file holds a view (`camera`), else 0 (since 1.8; 1.7
+    /// wrote 0 here).
+    pub has_camera: u32,
     /// The scene, its arrays pointing into the file.
     pub scene: CorayScene,
     /// The tree over `scene`, for every `coray_kdtree_*` call.
     pub tree: CorayKdTree,
+    /// The camera the scene was saved with, when `has_camera` is 1 (its
+    /// `struct_size` set; a usable camera, checked). Since 1.8.
+    pub camera: CorayCamera,
 }
 
 impl Default for CoraySaved {
@@ -71,18 +86,21 @@ impl Default for CoraySaved {
         CoraySaved {
             struct_size: core::mem::size_of::<CoraySaved>(),
             preset: 0,
-            reserved: 0,
+            has_camera: 0,
             scene: coray_scene_default(),
             tree: CorayKdTree { opaque: [0; 32] },
+            camera: CorayCamera::default(),
         }
     }
 }
 
 // SAFETY: repr(C) of usize, u32, a Versioned struct of pointers and
-// sizes, and u64 words: every bit pattern valid, `struct_size` first, no
-// padding (8-byte fields after two u32).
+// sizes, u64 words and a camera of usize, f32 and u32 fields: every bit
+// pattern valid, `struct_size` first, no padding (8-byte fields after two
+// u32; the camera 8-aligned after the u64 words). The first published
+// struct (1.7) ended at `tree`.
 unsafe impl carve::Versioned for CoraySaved {
-    const SIZE_1_0: usize = core::mem::size_of::<Self>();
+    const SIZE_1_0: usize = core::mem::offset_of!(CoraySaved, camera);
 }
 
 /// A `CoraySaved` with its `struct_size` set: pass it to
@@ -122,6 +140,7 @@ fn word32(file: &[u8], at: usize) -> u32 {
 struct Parts {
     preset: CorayKdPreset,
     arrays: [(usize, usize, usize); 5],
+    camera: Option<CorayCamera>,
 }
 
 /// Checks everything of `file` but the tree: magic, version, byte order,
@@ -131,7 +150,8 @@ fn parts(file: &[u8]) -> Result<Parts, CorayStatus> {
     if file.len() < CORAY_SAVED_HEADER_BYTES || file[..8] != SAVED_MAGIC {
         return damaged;
     }
-    if word32(file, 8) != CORAY_SAVED_VERSION || word32(file, 12) != CORAY_SAVED_BYTE_ORDER {
+    let version = word32(file, 8);
+    if !(version == 2 || version == 3) || word32(file, 12) != CORAY_SAVED_BYTE_ORDER {
         return damaged;
     }
     if word(file, 14) != file.len() as u64 || checksum(file) != word(file, 3) {
@@ -155,9 +175,38 @@ fn parts(file: &[u8]) -> Result<Parts, CorayStatus> {
         }
         *a = (offset as usize, count as usize, elem[k] as usize);
     }
+    let view_at = word(file, 15);
+    let camera = match view_at {
+        0 => None,
+        _ if version == 2 => return damaged,
+        at => {
+            let fits = at.is_multiple_of(16)
+                && at >= CORAY_SAVED_HEADER_BYTES as u64
+                && at <= (file.len() - VIEW_BYTES) as u64;
+            if !fits {
+                return damaged;
+            }
+            let at = at as usize;
+            let f = |k: usize| f32::from_bits(word32(file, at + 4 * k));
+            let c = CorayCamera {
+                struct_size: core::mem::size_of::<CorayCamera>(),
+                from: [f(0), f(1), f(2)],
+                at: [f(3), f(4), f(5)],
+                up: [f(6), f(7), f(8)],
+                angle_deg: f(9),
+                width: word32(file, at + 40),
+                height: word32(file, at + 44),
+            };
+            if crate::cast::camera(&c).is_err() {
+                return damaged;
+            }
+            Some(c)
+        }
+    };
     Ok(Parts {
         preset: word32(file, 16),
         arrays,
+        camera,
     })
 }
 
@@ -224,9 +273,10 @@ pub unsafe extern "C" fn coray_saved_open(
         out.write(CoraySaved {
             struct_size: 0,
             preset: p.preset,
-            reserved: 0,
+            has_camera: p.camera.is_some() as u32,
             scene,
             tree,
+            camera: p.camera.unwrap_or_default(),
         });
         Ok(())
     })
@@ -320,12 +370,14 @@ pub(crate) fn c_scene(scene: &coray::Scene) -> CorayScene {
     c
 }
 
-/// The file holding `scene` and a kd-tree built on it with `preset` and
-/// `omit_ropes`: with ropes (0: every call works on it, the casts too),
-/// without (1: smaller) or compact (2: smaller still).
+/// The file holding `scene`, its view `camera` when given, and a kd-tree
+/// built on it with `preset` and `omit_ropes`: with ropes (0: every call
+/// works on it, the casts too), without (1: smaller) or compact (2:
+/// smaller still).
 #[cfg(feature = "std")]
 pub fn kdtree_file(
     scene: &coray::Scene,
+    camera: Option<&coray::Camera>,
     preset: CorayKdPreset,
     omit_ropes: u32,
 ) -> Result<std::vec::Vec<u8>, CorayStatus> {
@@ -384,11 +436,22 @@ pub fn kdtree_file(
         offsets[k] = out.len() as u64;
         out.extend_from_slice(bytes);
     }
+    let mut view_at = 0u64;
+    if let Some(c) = camera {
+        out.resize(align16(out.len()), 0);
+        view_at = out.len() as u64;
+        let floats = [c.from.to_array(), c.at.to_array(), c.up.to_array()];
+        for x in floats.iter().flatten().chain([&c.angle_deg]) {
+            out.extend_from_slice(&x.to_ne_bytes());
+        }
+        out.extend_from_slice(&c.width.to_ne_bytes());
+        out.extend_from_slice(&c.height.to_ne_bytes());
+    }
     out[0..8].copy_from_slice(&SAVED_MAGIC);
     out[8..12].copy_from_slice(&CORAY_SAVED_VERSION.to_ne_bytes());
     out[12..16].copy_from_slice(&CORAY_SAVED_BYTE_ORDER.to_ne_bytes());
     out[16..20].copy_from_slice(&preset.to_ne_bytes());
-    let words: [u64; 11] = [
+    let words: [u64; 12] = [
         parts[0].1 as u64,
         parts[1].1 as u64,
         parts[2].1 as u64,
@@ -400,6 +463,7 @@ pub fn kdtree_file(
         offsets[4],
         arena_bytes as u64,
         out.len() as u64,
+        view_at,
     ];
     for (k, w) in words.iter().enumerate() {
         out[32 + 8 * k..40 + 8 * k].copy_from_slice(&w.to_ne_bytes());

@@ -210,7 +210,8 @@ fn install_then_build_the_examples_with_pkg_config_and_cmake() {
         spheres: &s,
         cones: &[],
     };
-    let bytes = coray_ffi::saved::kdtree_file(&scene, coray_ffi::CORAY_KD_PRESET_AUTO, 0).unwrap();
+    let bytes =
+        coray_ffi::saved::kdtree_file(&scene, None, coray_ffi::CORAY_KD_PRESET_AUTO, 0).unwrap();
     std::fs::write(&saved, &bytes).unwrap();
     let out = run(
         "trace_saved",

@@ -121,7 +121,7 @@ fn trace(tree: &CorayKdTree) -> Vec<(u32, u32, u32)> {
 #[test]
 fn a_sound_file_opens_and_traces_as_its_scene() {
     let o = owned();
-    let bytes = kdtree_file(&o.scene(), CORAY_KD_PRESET_AUTO, 0).unwrap();
+    let bytes = kdtree_file(&o.scene(), None, CORAY_KD_PRESET_AUTO, 0).unwrap();
     let (s, saved, _file) = open(&bytes);
     assert_eq!(s, CorayStatus::Ok);
     assert_eq!(saved.preset, CORAY_KD_PRESET_AUTO);
@@ -132,7 +132,7 @@ fn a_sound_file_opens_and_traces_as_its_scene() {
     assert_eq!((saved.scene.sphere_count, saved.scene.cone_count), (6, 1));
     // The same hits as a tree built over the scene in memory.
     let (arena, used) = {
-        let b = kdtree_file(&o.scene(), CORAY_KD_PRESET_AUTO, 0).unwrap();
+        let b = kdtree_file(&o.scene(), None, CORAY_KD_PRESET_AUTO, 0).unwrap();
         let at = u64::from_ne_bytes(b[96..104].try_into().unwrap()) as usize;
         let n = u64::from_ne_bytes(b[104..112].try_into().unwrap()) as usize;
         (Aligned::of(&b[at..at + n]), n)
@@ -165,7 +165,8 @@ fn a_sound_file_opens_and_traces_as_its_scene() {
 fn every_flipped_bit_is_a_damaged_file() {
     let o = owned();
     for omit_ropes in [0, 2] {
-        let bytes = kdtree_file(&o.scene(), CORAY_KD_PRESET_PAPER, omit_ropes).unwrap();
+        let bytes =
+            kdtree_file(&o.scene(), Some(&view()), CORAY_KD_PRESET_PAPER, omit_ropes).unwrap();
         for bit in 0..8 * bytes.len() {
             let mut bad = bytes.clone();
             bad[bit / 8] ^= 1 << (bit % 8);
@@ -178,7 +179,7 @@ fn every_flipped_bit_is_a_damaged_file() {
 #[test]
 fn truncated_extended_other_versions_and_byte_orders_are_damaged() {
     let o = owned();
-    let bytes = kdtree_file(&o.scene(), CORAY_KD_PRESET_AUTO, 0).unwrap();
+    let bytes = kdtree_file(&o.scene(), None, CORAY_KD_PRESET_AUTO, 0).unwrap();
     let resum = |b: &mut Vec<u8>| {
         let sum = checksum(b);
         b[24..32].copy_from_slice(&sum.to_ne_bytes());
@@ -193,7 +194,7 @@ fn truncated_extended_other_versions_and_byte_orders_are_damaged() {
     cases.push(("16 bytes more", longer));
     for (what, at, value) in [
         ("version 1", 8, 1u32),
-        ("version 3", 8, 3),
+        ("version 4", 8, 4),
         ("the other byte order", 12, 0x0403_0201),
     ] {
         let mut b = bytes.clone();
@@ -244,7 +245,7 @@ fn truncated_extended_other_versions_and_byte_orders_are_damaged() {
 #[test]
 fn a_forged_file_over_a_changed_scene_is_corrupt() {
     let o = owned();
-    let bytes = kdtree_file(&o.scene(), CORAY_KD_PRESET_AUTO, 0).unwrap();
+    let bytes = kdtree_file(&o.scene(), None, CORAY_KD_PRESET_AUTO, 0).unwrap();
     let word = |k: usize| u64::from_ne_bytes(bytes[8 * k..8 * k + 8].try_into().unwrap());
     let (vertices, triangles) = (word(8) as usize, word(9) as usize);
     for at in [triangles + 4 * 7, vertices + 4 * 20, vertices + 4 * 4] {
@@ -254,4 +255,98 @@ fn a_forged_file_over_a_changed_scene_is_corrupt() {
         bad[24..32].copy_from_slice(&sum.to_ne_bytes());
         assert_eq!(open(&bad).0, CorayStatus::CorruptArena, "byte {at}");
     }
+}
+
+/// The camera format 3 saves with the scene (`coray build` writes the
+/// scene's own).
+fn view() -> coray::Camera {
+    coray::Camera {
+        from: coray::Vec3::new(1.0, 2.0, 9.0),
+        at: coray::Vec3::new(0.0, 0.5, 0.0),
+        up: coray::Vec3::Y,
+        angle_deg: 40.0,
+        width: 320,
+        height: 200,
+    }
+}
+
+/// Format 3 keeps the view: it opens as it was written; a file without
+/// one, and a version 2 file (1.7's, no view), open with `has_camera` 0;
+/// a view past the end, misaligned, in a version 2 file or no usable
+/// camera (a forged file, checksum made again) is damage; a caller built
+/// against 1.7 (its struct ending at `tree`) gets no camera written.
+#[test]
+fn the_view_is_kept_and_checked() {
+    let o = owned();
+    let with = kdtree_file(&o.scene(), Some(&view()), CORAY_KD_PRESET_AUTO, 0).unwrap();
+    let (s, saved, _f) = open(&with);
+    assert_eq!(s, CorayStatus::Ok);
+    assert_eq!(saved.has_camera, 1);
+    let c = saved.camera;
+    assert_eq!(c.struct_size, core::mem::size_of::<CorayCamera>());
+    assert_eq!(
+        (c.from, c.at, c.up),
+        ([1.0, 2.0, 9.0], [0.0, 0.5, 0.0], [0.0, 1.0, 0.0])
+    );
+    assert_eq!((c.angle_deg, c.width, c.height), (40.0, 320, 200));
+
+    let without = kdtree_file(&o.scene(), None, CORAY_KD_PRESET_AUTO, 0).unwrap();
+    let (s, saved, _f) = open(&without);
+    assert_eq!((s, saved.has_camera), (CorayStatus::Ok, 0));
+    let resum = |b: &mut Vec<u8>| {
+        let sum = checksum(b);
+        b[24..32].copy_from_slice(&sum.to_ne_bytes());
+    };
+    let mut v2 = without.clone();
+    v2[8..12].copy_from_slice(&2u32.to_ne_bytes());
+    resum(&mut v2);
+    let (s, saved, _f) = open(&v2);
+    assert_eq!((s, saved.has_camera), (CorayStatus::Ok, 0), "a 1.7 file");
+
+    let view_at = u64::from_ne_bytes(with[120..128].try_into().unwrap()) as usize;
+    assert!(view_at >= 128 && view_at.is_multiple_of(16));
+    let mut cases: Vec<(&str, Vec<u8>)> = Vec::new();
+    for (what, at) in [
+        ("past the end", with.len() as u64),
+        ("misaligned", view_at as u64 + 4),
+        ("in the header", 64),
+    ] {
+        let mut b = with.clone();
+        b[120..128].copy_from_slice(&at.to_ne_bytes());
+        resum(&mut b);
+        cases.push((what, b));
+    }
+    let mut b = with.clone();
+    b[8..12].copy_from_slice(&2u32.to_ne_bytes());
+    resum(&mut b);
+    cases.push(("a view in a version 2 file", b));
+    for (what, k, value) in [
+        ("a NaN eye", 0, f32::NAN.to_bits()),
+        ("the eye on the point looked at", 3, 1.0f32.to_bits()),
+        ("no width", 10, 0),
+    ] {
+        let mut b = with.clone();
+        let at = view_at + 4 * k;
+        if k == 3 {
+            // at = from: all three coordinates.
+            b.copy_within(view_at..view_at + 12, view_at + 12);
+        } else {
+            b[at..at + 4].copy_from_slice(&value.to_ne_bytes());
+        }
+        resum(&mut b);
+        cases.push((what, b));
+    }
+    for (what, b) in &cases {
+        assert_eq!(open(b).0, CorayStatus::DamagedFile, "{what}");
+    }
+
+    // A 1.7 caller's struct: nothing written past its `tree`.
+    let a = Aligned::of(&with);
+    let mut out = coray_saved_default();
+    let old = core::mem::offset_of!(CoraySaved, camera);
+    out.struct_size = old;
+    out.camera.width = 12345;
+    let s = unsafe { coray_saved_open(a.ptr(), a.1, &mut out) };
+    assert_eq!(s, CorayStatus::Ok);
+    assert_eq!((out.has_camera, out.camera.width), (1, 12345));
 }

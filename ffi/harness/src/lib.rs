@@ -1197,7 +1197,16 @@ fn saved_damaged(
     };
     let preset = (inp.u8() % 2) as CorayKdPreset;
     let omit = (inp.u8() % 3) as u32;
-    let file = match coray_ffi::saved::kdtree_file(&scene, preset, omit) {
+    // A view in every file, so that damage reaches its record too.
+    let view = coray::Camera {
+        from: coray::Vec3::new(0.0, 1.0, 5.0),
+        at: coray::Vec3::ZERO,
+        up: coray::Vec3::Y,
+        angle_deg: 45.0,
+        width: 32,
+        height: 24,
+    };
+    let file = match coray_ffi::saved::kdtree_file(&scene, Some(&view), preset, omit) {
         Ok(f) => f,
         Err(s) => {
             rep.note("saved write", s);
