@@ -1,7 +1,9 @@
 //! Every tolerance of the library and of its comparisons, one constant per
-//! rule, each with its reason (as libm keeps its `precision.rs`). The core
-//! uses the first two; the benchmark, the Embree cross-checks and the tests
-//! use the rest through [`same_hit`] and [`near_tie`].
+//! rule, each with its reason (as libm keeps its `precision.rs`). The
+//! traversals and builds use the margins up to [`SECONDARY_RAY_OFFSET`]; the
+//! benchmark, the Embree cross-checks and the tests use the rest through
+//! [`same_hit`], [`near_tie`] and [`classify`]. The C ABI exports the
+//! comparison tolerances (`CORAY_TOL_*` in coray.h) for C cross-checks.
 
 use crate::Hit;
 
@@ -17,6 +19,38 @@ pub const LEAF_EXIT_MARGIN: f32 = 1.0 / 524_288.0;
 /// off a node's face with: far above the rounding of a ray's points on
 /// that face, so no traversal classifies a point across it differently.
 pub const FACE_CELL: f32 = 1.0 / 4096.0;
+
+/// Factor on a slab test's far distance so that rounding never loses a box
+/// the ray touches (Ize 2013: `1 + 2 gamma(3)`); every BVH and the wide
+/// hierarchy's kernels use it.
+pub const BOX_FAR_SLACK: f32 = 1.0 + 4.0 * f32::EPSILON;
+
+/// Relative widening (4 ulps) of a box computed with rounding (square
+/// roots, radii: spheres and cones), so that every point the primitive's
+/// own test can report lies inside it. Triangle boxes are exact.
+pub const ROUNDED_BOX_PAD: f32 = 4.0 * f32::EPSILON;
+
+/// Relative padding (4e-6) of every projection hierarchy rectangle: the
+/// projections of a box's corners and of a ray are each rounded, and a ray
+/// that hits the box must still find its point inside (a few ulps would
+/// do; this is ample and cheap).
+pub const PROJECTED_RECT_PAD: f32 = 4.0e-6;
+
+/// How far (1e-3, in the `sx`, `sy` of `Camera::ray_in`, 2 across the
+/// image) an LCTS window must lie outside the scene's projected box to be
+/// skipped: some 10^4 times the rounding of a pixel's direction and of the
+/// box's projection.
+pub const SCREEN_MARGIN: f32 = 1e-3;
+
+/// Depth along the view (1e-3 of the farthest corner's distance) that each
+/// corner of the scene's box must exceed for the box to have a projected
+/// rectangle: nearer the eye's plane its projection is unbounded.
+pub const SCREEN_NEAR_DEPTH: f32 = 1e-3;
+
+/// A ray leaving a surface (shadow, bounce) starts 1e-4 of the scene's size
+/// from its point, far above the rounding of the hit point, so that it
+/// does not meet the surface it leaves.
+pub const SECONDARY_RAY_OFFSET: f32 = 1e-4;
 
 /// Two hits of one ray on different primitives are a tie when their t
 /// agree within 2^-20 relative: both are the closest within f32 rounding

@@ -128,8 +128,6 @@ pub struct TraceCtx<C> {
     pub counts: RayCounts,
 }
 
-const EPS: f32 = 1e-4;
-
 impl<S: Shooter> Tracer<'_, S> {
     /// Fresh per-thread state.
     pub fn ctx(&self) -> TraceCtx<S::Ctx> {
@@ -221,7 +219,7 @@ impl<S: Shooter> Tracer<'_, S> {
         let one_sided = self.rules.one_sided && !patch && m.t <= 0.0;
         let light_n = if one_sided { front } else { n };
         let color = Vec3::from(m.color);
-        let eps = EPS * self.scale();
+        let eps = coray::tolerance::SECONDARY_RAY_OFFSET * self.scale();
         let light_scale = 1.0 / (self.mesh.lights.len().max(1) as f32).sqrt();
         let mut c = Vec3::ZERO;
         for (li, (lp, lc)) in self.mesh.lights.iter().enumerate() {

@@ -6,6 +6,7 @@
 use super::{Bvh, BvhNode};
 use crate::geom::leaf::beats;
 use crate::geom::{Hit, PreparedRay, Ray, GEOM_SPHERES, GEOM_TRIANGLES};
+use crate::tolerance::BOX_FAR_SLACK;
 use crate::TraceStats;
 
 /// Thesis 4.1.2: a slab costs 15 per axis (2 when the ray is parallel to
@@ -70,10 +71,6 @@ pub struct BvhStackItem {
     pub t: f32,
 }
 
-/// Slack on the far distance so that rounding never loses a box the ray
-/// touches (Ize 2013: `1 + 2 gamma(3)`).
-const FAR_SLACK: f32 = 1.0 + 4.0 * f32::EPSILON;
-
 /// The slab test in the thesis' order (x, y, z, stopping at the first axis
 /// that shows a miss), clipped to `[t_min, t_max]`: the entry distance and
 /// the cost.
@@ -96,7 +93,7 @@ pub(crate) fn box_test(n: &BvhNode, r: &PreparedRay, t_max: f32) -> (Option<f32>
         let hi = (n.max[a] - r.origin[a]) * r.inv_dir[a];
         let (near, far) = if lo <= hi { (lo, hi) } else { (hi, lo) };
         t0 = t0.max(near);
-        t1 = t1.min(far * FAR_SLACK);
+        t1 = t1.min(far * BOX_FAR_SLACK);
         if !(t0 <= t1) {
             return (None, cost);
         }

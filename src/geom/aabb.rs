@@ -172,7 +172,7 @@ impl ClipBox {
 /// test can report lies inside it. Triangle boxes are exact and need none.
 pub(crate) fn pad_rounding(b: &Aabb) -> Aabb {
     let m = b.min.abs().max(b.max.abs()).max_element();
-    let e = Vec3::splat(m * 4.0 * f32::EPSILON);
+    let e = Vec3::splat(m * crate::tolerance::ROUNDED_BOX_PAD);
     Aabb {
         min: b.min - e,
         max: b.max + e,

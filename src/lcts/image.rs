@@ -29,6 +29,7 @@ use super::window::{Baseline, Kernel, Shaft};
 use crate::geom::lanes::LANES;
 use crate::geom::{Aabb, Camera, Hit};
 use crate::kd::{KdStackItem, KdTree, Traversal, KD_STACK_LEN};
+use crate::tolerance::{SCREEN_MARGIN, SCREEN_NEAR_DEPTH};
 use crate::{Error, TraceStats};
 use crate::{Ray, Vec3};
 
@@ -621,11 +622,6 @@ fn count_window(st: &mut CastStats, seq: &slcts::Slcts) {
     st.windows_entered += (seq.leaves == 0 && seq.entry.is_some_and(|e| e.node != 0)) as u64;
 }
 
-/// How far (in the `sx`, `sy` of [`Camera::ray_in`], 2 across the image)
-/// a window must lie outside [`ScreenBox`] to be skipped: some 10^4 times
-/// the rounding of a pixel's direction and of the box's projection.
-const SCREEN_MARGIN: f32 = 1e-3;
-
 /// Where the scene's box lies on the image plane: the rectangle bounding
 /// its corners' projections, in the camera's `sx`, `sy`, made only when the
 /// whole box lies in front of the eye. A ray through the eye meets the box
@@ -663,7 +659,7 @@ impl ScreenBox {
         for q in corners {
             let depth = q.dot(f);
             // (A box reaching to or behind the eye's plane: no rectangle.)
-            if !(depth > 1e-3 * far) {
+            if !(depth > SCREEN_NEAR_DEPTH * far) {
                 return None;
             }
             let s = [q.dot(r) / r2 / depth, q.dot(u) / u2 / depth];

@@ -5,17 +5,13 @@
 //! when its point lies in the box's rectangle.
 
 use crate::geom::Aabb;
+use crate::tolerance::PROJECTED_RECT_PAD;
 use crate::Vec3;
 
 /// Coordinates this large stand for "unbounded": a box that reaches behind
 /// the plane's eye projects onto the whole plane. Finite, so that builders'
 /// areas stay finite (`(2e18)^2` fits an `f32`).
 pub const UNBOUNDED: f32 = 1.0e18;
-
-/// Relative padding of every rectangle: the projections of a box's corners
-/// and of a ray are each rounded, and a ray that hits the box must still
-/// find its point inside (a few ulps would do; this is ample and cheap).
-const PAD: f32 = 4.0e-6;
 
 /// A 2D view-aligned box on a projection plane, and the nearest depth of
 /// what it bounds (for ordering and pruning closest-hit traversal).
@@ -193,12 +189,13 @@ impl ProjPlane {
         if behind {
             return if ahead { Rect::ALL } else { Rect::EMPTY };
         }
-        let pad = |lo: f32, hi: f32| PAD * (lo.abs().max(hi.abs()) + (hi - lo) + 1.0e-3);
+        let pad =
+            |lo: f32, hi: f32| PROJECTED_RECT_PAD * (lo.abs().max(hi.abs()) + (hi - lo) + 1.0e-3);
         let (px, py) = (pad(r.min[0], r.max[0]), pad(r.min[1], r.max[1]));
         let out = Rect {
             min: [r.min[0] - px, r.min[1] - py],
             max: [r.max[0] + px, r.max[1] + py],
-            near: r.near * (1.0 - PAD),
+            near: r.near * (1.0 - PROJECTED_RECT_PAD),
         };
         let big = 0.25 * UNBOUNDED;
         if !(out.min[0] > -big && out.max[0] < big && out.min[1] > -big && out.max[1] < big) {

@@ -17,10 +17,11 @@
 
 use super::block::{LeafBlock, EMPTY_BLOCK, NO_PRIM};
 use super::node::{leaf_run, EMPTY_SLOT, LEAF_BIT, LOWER, UPPER, WIDTH};
-use super::traverse::{read_entry_ahead, WideStackItem, FAR_SLACK};
+use super::traverse::{read_entry_ahead, WideStackItem};
 use super::WideBvh;
 use crate::geom::leaf::beats;
 use crate::geom::{Hit, PreparedRay, Ray, GEOM_TRIANGLES};
+use crate::tolerance::BOX_FAR_SLACK;
 use crate::TraceStats;
 use core::arch::x86_64::*;
 
@@ -322,7 +323,7 @@ fn walk<const ANY: bool, const OTHERS: bool, const PARALLEL: bool, const LANE: b
         row(2, !(inv[2] < 0.0)),
     );
     let t_min = _mm256_set1_ps(r.t_min);
-    let slack = _mm256_set1_ps(FAR_SLACK);
+    let slack = _mm256_set1_ps(BOX_FAR_SLACK);
     let tl = TriLanes {
         o: [
             _mm256_set1_ps(origin[r.kx]),

@@ -33,9 +33,10 @@
 use super::avx2::{walk_from, Best};
 use super::block::{LeafBlock, NO_PRIM};
 use super::node::{leaf_run, EMPTY_SLOT, LEAF_BIT, LOWER, UPPER, WIDTH};
-use super::traverse::{read_entry_ahead, WideStackItem, FAR_SLACK};
+use super::traverse::{read_entry_ahead, WideStackItem};
 use super::WideBvh;
 use crate::geom::{Hit, PreparedRay, Ray};
+use crate::tolerance::BOX_FAR_SLACK;
 use crate::TraceStats;
 use core::arch::x86_64::*;
 
@@ -314,7 +315,7 @@ impl Packet {
             tn = _mm256_max_ps(near, tn);
             tf = _mm256_min_ps(far, tf);
         }
-        let tf = _mm256_min_ps(_mm256_mul_ps(tf, splat(FAR_SLACK)), splat(limit));
+        let tf = _mm256_min_ps(_mm256_mul_ps(tf, splat(BOX_FAR_SLACK)), splat(limit));
         let hit = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
         (hit, tn)
     }
@@ -341,7 +342,7 @@ impl Packet {
             tn = _mm256_max_ps(near, tn);
             tf = _mm256_min_ps(far, tf);
         }
-        let tf = _mm256_min_ps(_mm256_mul_ps(tf, splat(FAR_SLACK)), limits);
+        let tf = _mm256_min_ps(_mm256_mul_ps(tf, splat(BOX_FAR_SLACK)), limits);
         _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32
     }
 }

@@ -23,6 +23,7 @@ use super::node::{leaf_run, WideNode, EMPTY_SLOT, LEAF_BIT, LOWER, UPPER, WIDTH}
 use super::WideBvh;
 use crate::geom::leaf::beats;
 use crate::geom::{intersect_triangles4, Hit, PreparedRay, Ray, GEOM_TRIANGLES};
+use crate::tolerance::BOX_FAR_SLACK;
 use crate::TraceStats;
 
 /// A traversal stack entry: a node's entry (an interior child, or a leaf's
@@ -35,10 +36,6 @@ pub struct WideStackItem {
     /// Entry distance into its box.
     pub t: f32,
 }
-
-/// Slack on the far distance so that rounding never loses a box the ray
-/// touches (Ize 2013: `1 + 2 gamma(3)`), as the binary hierarchies use.
-pub(super) const FAR_SLACK: f32 = 1.0 + 4.0 * f32::EPSILON;
 
 /// What a walk does at a leaf and how far a box may lie.
 trait Query {
@@ -265,7 +262,7 @@ impl Slabs {
         }
         let mut hit = 0u32;
         for i in 0..WIDTH {
-            hit |= ((tn[i] <= fmin(tf[i] * FAR_SLACK, t1)) as u32) << i;
+            hit |= ((tn[i] <= fmin(tf[i] * BOX_FAR_SLACK, t1)) as u32) << i;
         }
         (hit, tn)
     }
