@@ -1,6 +1,6 @@
 /* coray against Embree 3 on the same scenes, ray for ray: closest hits of
  * both kd traversals and of the five hierarchies, and any-hit answers. Same hit or miss, same primitive,
- * |dt| <= 1e-4 max(1, t). Disagreements that are documented ties (a ray
+ * |dt| <= CORAY_TOL_SAME_T_REL max(1, t). Disagreements that are documented ties (a ray
  * grazing an edge, a silhouette or a rim; two primitives at the same
  * distance) are counted and printed apart. Every other disagreement goes to
  * a referee: both answers' primitives intersected in double precision. Where
@@ -170,7 +170,7 @@ static int embree_occluded(RTCScene sc, const CorayRay *r) {
     return ray.tfar == -INFINITY;
 }
 
-static float tol(float t) { return 1e-4f * (fabsf(t) > 1.0f ? fabsf(t) : 1.0f); }
+static float tol(float t) { return (float)CORAY_TOL_SAME_T_REL * (fabsf(t) > 1.0f ? fabsf(t) : 1.0f); }
 
 /* A hit that a rounding error can turn into a miss: near a triangle edge,
  * tangent to a sphere or cone (silhouette), or at a cone's open rim. */
@@ -179,13 +179,13 @@ static int grazing(const CorayRay *r, const CorayHit *h) {
     if (h->geom_id == CORAY_GEOM_TRIANGLES) {
         float w = 1.0f - h->u - h->v, m = h->u < h->v ? h->u : h->v;
         if (w < m) m = w;
-        if (m < 1e-4f) return 1;
+        if (m < (float)CORAY_TOL_EDGE_BARY) return 1;
     }
-    if (h->geom_id == CORAY_GEOM_CONES && (h->u < 1e-3f || h->u > 1.0f - 1e-3f)) return 1;
+    if (h->geom_id == CORAY_GEOM_CONES && (h->u < (float)CORAY_TOL_RIM_U || h->u > 1.0f - (float)CORAY_TOL_RIM_U)) return 1;
     dl = sqrtf(r->dir[0] * r->dir[0] + r->dir[1] * r->dir[1] + r->dir[2] * r->dir[2]);
     nl = sqrtf(h->ng[0] * h->ng[0] + h->ng[1] * h->ng[1] + h->ng[2] * h->ng[2]);
     c = (r->dir[0] * h->ng[0] + r->dir[1] * h->ng[1] + r->dir[2] * h->ng[2]) / (dl * nl);
-    return fabsf(c) < 2e-2f || h->t < r->tnear + tol(r->tnear);
+    return fabsf(c) < (float)CORAY_TOL_GRAZE_COS || h->t < r->tnear + tol(r->tnear);
 }
 
 enum { SAME, TIE_T, TIE_GRAZE, EMBREE_WRONG, DISAGREE };

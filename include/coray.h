@@ -25,6 +25,26 @@
 // Alignment, in bytes, of every arena, scratch and stack passed to coray.
 #define CORAY_ARENA_ALIGN 16
 
+// Two libraries' hits on one primitive agree when their t differ by at
+// most this times max(1, |t|) (`coray::tolerance::SAME_T_REL`). The
+// `CORAY_TOL_*` are the cross-check rules of `coray::tolerance`, written
+// as double literals: compare as coray does, in float
+// (`(float)CORAY_TOL_EDGE_BARY`). Since 1.8.
+#define CORAY_TOL_SAME_T_REL 1e-4
+
+// A triangle hit whose smallest barycentric weight is below this lies on
+// an edge, where rounding may move it (`coray::tolerance::EDGE_BARY`).
+// Since 1.8.
+#define CORAY_TOL_EDGE_BARY 1e-4
+
+// A cone hit this close to either rim, in `u` (`coray::tolerance::RIM_U`).
+// Since 1.8.
+#define CORAY_TOL_RIM_U 1e-3
+
+// A hit where the ray meets the surface at a cosine below this is tangent
+// (`coray::tolerance::GRAZE_COS`). Since 1.8.
+#define CORAY_TOL_GRAZE_COS 2e-2
+
 // Bytes of the traversal stack every kd-tree trace and cast takes.
 #define CORAY_KDTREE_STACK_BYTES 4608
 

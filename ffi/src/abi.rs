@@ -20,6 +20,30 @@ pub const CORAY_INVALID_ID: u32 = 0xFFFF_FFFF;
 /// Alignment, in bytes, of every arena, scratch and stack passed to coray.
 pub const CORAY_ARENA_ALIGN: usize = 16;
 
+/// Two libraries' hits on one primitive agree when their t differ by at
+/// most this times max(1, |t|) (`coray::tolerance::SAME_T_REL`). The
+/// `CORAY_TOL_*` are the cross-check rules of `coray::tolerance`, written
+/// as double literals: compare as coray does, in float
+/// (`(float)CORAY_TOL_EDGE_BARY`). Since 1.8.
+pub const CORAY_TOL_SAME_T_REL: f32 = 1e-4;
+/// A triangle hit whose smallest barycentric weight is below this lies on
+/// an edge, where rounding may move it (`coray::tolerance::EDGE_BARY`).
+/// Since 1.8.
+pub const CORAY_TOL_EDGE_BARY: f32 = 1e-4;
+/// A cone hit this close to either rim, in `u` (`coray::tolerance::RIM_U`).
+/// Since 1.8.
+pub const CORAY_TOL_RIM_U: f32 = 1e-3;
+/// A hit where the ray meets the surface at a cosine below this is tangent
+/// (`coray::tolerance::GRAZE_COS`). Since 1.8.
+pub const CORAY_TOL_GRAZE_COS: f32 = 2e-2;
+const _: () = {
+    use coray::tolerance as t;
+    assert!(CORAY_TOL_SAME_T_REL.to_bits() == t::SAME_T_REL.to_bits());
+    assert!(CORAY_TOL_EDGE_BARY.to_bits() == t::EDGE_BARY.to_bits());
+    assert!(CORAY_TOL_RIM_U.to_bits() == t::RIM_U.to_bits());
+    assert!(CORAY_TOL_GRAZE_COS.to_bits() == t::GRAZE_COS.to_bits());
+};
+
 /// The primitives, borrowed for the duration of each call (coray keeps no
 /// pointer but inside the handles of the open calls). A structure stores
 /// primitive indices, not copies: pass the same scene, unchanged, to every
