@@ -134,6 +134,59 @@ struct Built {
   Arena arena;
   Handle handle;
 };
+
+/// One family's C calls that build and open a structure
+/// (`coray_<family>_requirements`, `_build`, `_open`, `_info`), and the
+/// family's name for errors.
+template <typename Handle, typename Params, typename Info>
+struct Calls {
+  const char *family;
+  CorayStatus (*requirements)(std::size_t, const Params *, CorayRequirements *);
+  CorayStatus (*build)(const CorayScene *, const Params *, void *, std::size_t, void *, std::size_t, std::size_t *);
+  CorayStatus (*open)(const void *, std::size_t, const CorayScene *, Handle *);
+  CorayStatus (*info)(const Handle *, Info *);
+  Info (*info_default)();
+
+  void check(CorayStatus status, const char *verb) const {
+    if (status != CORAY_STATUS_OK) throw Error(status, (std::string("coray_") + family + "_" + verb).c_str());
+  }
+};
+
+/// Builds over `scene` (moved in) with `params`, shrinks the arena to what
+/// the structure keeps (its info's `arena_bytes_used`) and opens it there.
+template <typename Handle, typename Params, typename Info>
+std::unique_ptr<Built<Handle>> build(const Calls<Handle, Params, Info> &c, Scene scene, const Params &params) {
+  auto b = std::make_unique<Built<Handle>>();
+  b->scene = std::move(scene);
+  b->c_scene = b->scene.c_scene();
+  CorayRequirements req = coray_requirements_default();
+  c.check(c.requirements(b->scene.prim_count(), &params, &req), "requirements");
+  Arena arena(req.arena_bytes), scratch(req.scratch_bytes);
+  c.check(c.build(&b->c_scene, &params, arena.data(), arena.size(), scratch.data(), scratch.size(), nullptr), "build");
+  Handle full;
+  c.check(c.open(arena.data(), arena.size(), &b->c_scene, &full), "open");
+  Info info = c.info_default();
+  c.check(c.info(&full, &info), "info");
+  b->arena = arena.prefix(info.arena_bytes_used);
+  c.check(c.open(b->arena.data(), b->arena.size(), &b->c_scene, &b->handle), "open");
+  return b;
+}
+
+inline const Calls<CorayWide, CorayWideParams, CorayWideInfo> &wide_calls() {
+  static const Calls<CorayWide, CorayWideParams, CorayWideInfo> c{
+      "wide", coray_wide_requirements, coray_wide_build, coray_wide_open, coray_wide_info, coray_wide_info_default};
+  return c;
+}
+
+inline const Calls<CorayKdTree, CorayKdParams, CorayKdTreeInfo> &kdtree_calls() {
+  static const Calls<CorayKdTree, CorayKdParams, CorayKdTreeInfo> c{"kdtree",
+                                                                     coray_kdtree_requirements,
+                                                                     coray_kdtree_build,
+                                                                     coray_kdtree_open,
+                                                                     coray_kdtree_info,
+                                                                     coray_kdtree_info_default};
+  return c;
+}
 }  // namespace detail
 
 /// The wide hierarchy over a scene: the structure for triangle meshes and
@@ -143,21 +196,7 @@ class Wide {
   /// Builds over `scene` (moved in), shrinks the arena to what the tree
   /// keeps (`arena_bytes_used`) and opens it.
   static Wide build(Scene scene, const CorayWideParams &params = coray_wide_params_default()) {
-    auto b = std::make_unique<detail::Built<CorayWide>>();
-    b->scene = std::move(scene);
-    b->c_scene = b->scene.c_scene();
-    CorayRequirements req = coray_requirements_default();
-    check(coray_wide_requirements(b->scene.prim_count(), &params, &req), "coray_wide_requirements");
-    Arena arena(req.arena_bytes), scratch(req.scratch_bytes);
-    check(coray_wide_build(&b->c_scene, &params, arena.data(), arena.size(), scratch.data(), scratch.size(), nullptr),
-          "coray_wide_build");
-    CorayWide full;
-    check(coray_wide_open(arena.data(), arena.size(), &b->c_scene, &full), "coray_wide_open");
-    CorayWideInfo info = coray_wide_info_default();
-    check(coray_wide_info(&full, &info), "coray_wide_info");
-    b->arena = arena.prefix(info.arena_bytes_used);
-    check(coray_wide_open(b->arena.data(), b->arena.size(), &b->c_scene, &b->handle), "coray_wide_open");
-    return Wide(std::move(b));
+    return Wide(detail::build(detail::wide_calls(), std::move(scene), params));
   }
 
   const CorayWide *handle() const noexcept { return &b_->handle; }
@@ -195,21 +234,7 @@ class KdTree {
   /// Builds over `scene` (moved in) with `params`, shrinks the arena to what
   /// the tree keeps (`arena_bytes_used`) and opens it.
   static KdTree build(Scene scene, const CorayKdParams &params = coray_kdtree_params_default(CORAY_KD_PRESET_AUTO)) {
-    auto b = std::make_unique<detail::Built<CorayKdTree>>();
-    b->scene = std::move(scene);
-    b->c_scene = b->scene.c_scene();
-    CorayRequirements req = coray_requirements_default();
-    check(coray_kdtree_requirements(b->scene.prim_count(), &params, &req), "coray_kdtree_requirements");
-    Arena arena(req.arena_bytes), scratch(req.scratch_bytes);
-    check(coray_kdtree_build(&b->c_scene, &params, arena.data(), arena.size(), scratch.data(), scratch.size(), nullptr),
-          "coray_kdtree_build");
-    CorayKdTree full;
-    check(coray_kdtree_open(arena.data(), arena.size(), &b->c_scene, &full), "coray_kdtree_open");
-    CorayKdTreeInfo info = coray_kdtree_info_default();
-    check(coray_kdtree_info(&full, &info), "coray_kdtree_info");
-    b->arena = arena.prefix(info.arena_bytes_used);
-    check(coray_kdtree_open(b->arena.data(), b->arena.size(), &b->c_scene, &b->handle), "coray_kdtree_open");
-    return KdTree(std::move(b));
+    return KdTree(detail::build(detail::kdtree_calls(), std::move(scene), params));
   }
 
   const CorayKdTree *handle() const noexcept { return &b_->handle; }
