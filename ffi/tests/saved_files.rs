@@ -35,6 +35,20 @@ fn open(bytes: &[u8]) -> (CorayStatus, CoraySaved, Aligned) {
     (s, out, a)
 }
 
+/// Writes `b`'s checksum again after a change, so that the change and not
+/// the checksum is what `coray_saved_open` judges.
+fn resum(b: &mut [u8]) {
+    let sum = checksum(b);
+    b[24..32].copy_from_slice(&sum.to_ne_bytes());
+}
+
+/// Every file of `cases` is refused as damaged (the case named on failure).
+fn assert_all_damaged(cases: &[(&str, Vec<u8>)]) {
+    for (what, b) in cases {
+        assert_eq!(open(b).0, CorayStatus::DamagedFile, "{what}");
+    }
+}
+
 struct Owned {
     vertices: Vec<[f32; 3]>,
     triangles: Vec<[u32; 3]>,
@@ -180,10 +194,6 @@ fn every_flipped_bit_is_a_damaged_file() {
 fn truncated_extended_other_versions_and_byte_orders_are_damaged() {
     let o = owned();
     let bytes = kdtree_file(&o.scene(), None, CORAY_KD_PRESET_AUTO, 0).unwrap();
-    let resum = |b: &mut Vec<u8>| {
-        let sum = checksum(b);
-        b[24..32].copy_from_slice(&sum.to_ne_bytes());
-    };
     let mut cases: Vec<(&str, Vec<u8>)> = vec![
         ("empty", Vec::new()),
         ("header only", bytes[..128].to_vec()),
@@ -214,9 +224,7 @@ fn truncated_extended_other_versions_and_byte_orders_are_damaged() {
         resum(&mut b);
         cases.push((what, b));
     }
-    for (what, b) in &cases {
-        assert_eq!(open(b).0, CorayStatus::DamagedFile, "{what}");
-    }
+    assert_all_damaged(&cases);
     // A sound file: NULL, misaligned, no out struct.
     let a = Aligned::of(&bytes);
     let mut out = coray_saved_default();
@@ -293,10 +301,6 @@ fn the_view_is_kept_and_checked() {
     let without = kdtree_file(&o.scene(), None, CORAY_KD_PRESET_AUTO, 0).unwrap();
     let (s, saved, _f) = open(&without);
     assert_eq!((s, saved.has_camera), (CorayStatus::Ok, 0));
-    let resum = |b: &mut Vec<u8>| {
-        let sum = checksum(b);
-        b[24..32].copy_from_slice(&sum.to_ne_bytes());
-    };
     let mut v2 = without.clone();
     v2[8..12].copy_from_slice(&2u32.to_ne_bytes());
     resum(&mut v2);
@@ -336,9 +340,7 @@ fn the_view_is_kept_and_checked() {
         resum(&mut b);
         cases.push((what, b));
     }
-    for (what, b) in &cases {
-        assert_eq!(open(b).0, CorayStatus::DamagedFile, "{what}");
-    }
+    assert_all_damaged(&cases);
 
     // A 1.7 caller's struct: nothing written past its `tree`.
     let a = Aligned::of(&with);
