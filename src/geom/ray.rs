@@ -138,6 +138,7 @@ impl PreparedRay {
     /// work in (`dir_len`, `unit_dir`: NaN here), for walks over scenes of
     /// triangles alone: a square root and three divisions fewer a ray.
     /// The triangle test's constants are [`PreparedRay::new`]'s bit for bit.
+    #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
     #[inline(always)]
     pub(crate) fn for_triangles(ray: &Ray) -> PreparedRay {
         PreparedRay::with_frame::<false>(ray, inverse(ray.dir))

@@ -23,7 +23,7 @@
 
 use super::guide::Paths;
 use super::history::{trace_recorded_on, History, HistoryRecord};
-use super::hlcts::{self, Boundary, HlctsEntry, Source, MAX_RAYS};
+use super::hlcts::{self, Boundary, Hlcts, HlctsEntry, Source, MAX_RAYS};
 use super::slcts;
 use super::window::{Baseline, Kernel, Shaft};
 use crate::geom::lanes::LANES;
@@ -875,6 +875,8 @@ impl<K: Kernel, F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, K, F> {
 
     /// Traces the ray of pixel (x, y) through `cut` into the slot at the
     /// front of `free`, returning it as a corner of the children and what is left free.
+    /// Never inlined: its recorded trace stays out of [`Bisection::shaft`]'s frame.
+    #[inline(never)]
     fn split_ray<'a, 'b>(
         &mut self,
         x: u32,
@@ -943,17 +945,8 @@ impl<K: Kernel, F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, K, F> {
             put_misses(&mut self.st.trace, self.put, [x0, x1], [y0, y1], corner);
             return;
         }
-        let bounds: [Boundary; MAX_RAYS] = core::array::from_fn(|j| {
-            let c = corners.get(j).copied().unwrap_or(corners[0]);
-            Boundary {
-                ray: c.ray,
-                records: c.records,
-                source: c.source,
-                hit: c.hit,
-            }
-        });
         let (cut_buf, hlcts_rest) = free.hlcts.split_at_mut(self.per_cut);
-        let cut = hlcts::build(self.tree, parent, &bounds[..corners.len()], cut_buf);
+        let cut = cut_of(self.tree, parent, corners, cut_buf);
         self.st.windows += 1;
         self.st.windows_shared += (cut.leading_leaves > 0) as u64;
         self.st.windows_terminated += cut.termination.is_some() as u64;
@@ -974,25 +967,7 @@ impl<K: Kernel, F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, K, F> {
                 return;
             }
             if x1 - x0 < LEAF_PIXELS_1D {
-                let hs = [corners[0].records, corners[1].records];
-                let buf = core::mem::take(&mut self.paths);
-                let paths = cut.paths(&hs, &mut *buf);
-                let mut batch = Batch::new(self.kernel, self.tree, Shaft::Hlcts(&cut), &paths);
-                for x in x0 + 1..x1 {
-                    let nearest = far_half(x, x0, x1);
-                    let ray = self.ray(x, y0);
-                    batch.push(
-                        x,
-                        y0,
-                        ray,
-                        nearest,
-                        self.stack,
-                        &mut self.st.trace,
-                        self.put,
-                    );
-                }
-                batch.flush(self.stack, &mut self.st.trace, self.put);
-                self.paths = buf;
+                self.interval_from_cut(&cut, corners, [x0, x1], y0);
                 return;
             }
             let xm = (x0 + x1) / 2;
@@ -1014,23 +989,7 @@ impl<K: Kernel, F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, K, F> {
         // object included); recording them only pays when they bound a
         // shaft of their own.
         if (x1 - x0 + 1) * (y1 - y0 + 1) <= self.leaf_pixels {
-            let corner = |x: u32, y: u32| (x == x0 || x == x1) && (y == y0 || y == y1);
-            let hs: [Option<&[HistoryRecord]>; 4] = core::array::from_fn(|j| corners[j].records);
-            let buf = core::mem::take(&mut self.paths);
-            let paths = cut.paths(&hs, &mut *buf);
-            let mut batch = Batch::new(self.kernel, self.tree, Shaft::Hlcts(&cut), &paths);
-            for y in y0..=y1 {
-                for x in x0..=x1 {
-                    if !corner(x, y) {
-                        // Corners 0 and 1 on the top row, 2 and 3 below.
-                        let nearest = far_half(x, x0, x1) + 2 * far_half(y, y0, y1);
-                        let ray = self.ray(x, y);
-                        batch.push(x, y, ray, nearest, self.stack, &mut self.st.trace, self.put);
-                    }
-                }
-            }
-            batch.flush(self.stack, &mut self.st.trace, self.put);
-            self.paths = buf;
+            self.rect_from_cut(&cut, corners, rect);
             return;
         }
         // Corners: 0 (x0, y0), 1 (x1, y0), 2 (x0, y1), 3 (x1, y1). The halves
@@ -1086,6 +1045,49 @@ impl<K: Kernel, F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, K, F> {
         self.halves(halves, [&first, &second], cut.as_slice(), depth, free);
     }
 
+    /// The pixels of interval `[x0, x1]` of row `y` between its two
+    /// corners, traced from `cut` without histories. Never inlined, nor
+    /// is [`Bisection::rect_from_cut`]: their batches and paths stay out
+    /// of the recursive [`Bisection::shaft`]'s frame (on a Cortex-M4 that
+    /// frame was 4.4 KiB, times the bisection's depth).
+    #[inline(never)]
+    fn interval_from_cut(&mut self, cut: &Hlcts, corners: &[Corner], [x0, x1]: [u32; 2], y: u32) {
+        let hs = [corners[0].records, corners[1].records];
+        let buf = core::mem::take(&mut self.paths);
+        let paths = cut.paths(&hs, &mut *buf);
+        let mut batch = Batch::new(self.kernel, self.tree, Shaft::Hlcts(cut), &paths);
+        for x in x0 + 1..x1 {
+            let nearest = far_half(x, x0, x1);
+            let ray = self.ray(x, y);
+            batch.push(x, y, ray, nearest, self.stack, &mut self.st.trace, self.put);
+        }
+        batch.flush(self.stack, &mut self.st.trace, self.put);
+        self.paths = buf;
+    }
+
+    /// The pixels of rectangle `[x0, y0, x1, y1]` but its four corners,
+    /// traced from `cut` without histories.
+    #[inline(never)]
+    fn rect_from_cut(&mut self, cut: &Hlcts, corners: &[Corner], [x0, y0, x1, y1]: [u32; 4]) {
+        let corner = |x: u32, y: u32| (x == x0 || x == x1) && (y == y0 || y == y1);
+        let hs: [Option<&[HistoryRecord]>; 4] = core::array::from_fn(|j| corners[j].records);
+        let buf = core::mem::take(&mut self.paths);
+        let paths = cut.paths(&hs, &mut *buf);
+        let mut batch = Batch::new(self.kernel, self.tree, Shaft::Hlcts(cut), &paths);
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                if !corner(x, y) {
+                    // Corners 0 and 1 on the top row, 2 and 3 below.
+                    let nearest = far_half(x, x0, x1) + 2 * far_half(y, y0, y1);
+                    let ray = self.ray(x, y);
+                    batch.push(x, y, ray, nearest, self.stack, &mut self.st.trace, self.put);
+                }
+            }
+        }
+        batch.flush(self.stack, &mut self.st.trace, self.put);
+        self.paths = buf;
+    }
+
     /// Casts the two halves of a split rectangle (or interval) under the
     /// same parent cut; the second reuses the buffers the first freed.
     fn halves(
@@ -1124,6 +1126,28 @@ impl<K: Kernel, F: FnMut(u32, u32, &Hit)> Bisection<'_, '_, K, F> {
             },
         );
     }
+}
+
+/// The cut of a shaft whose boundary rays are `corners`, under `parent`,
+/// into `buf`. Never inlined: its boundary array ([`MAX_RAYS`] rays) stays
+/// out of the recursive [`Bisection::shaft`]'s frame.
+#[inline(never)]
+fn cut_of<'b>(
+    tree: &KdTree,
+    parent: &[HlctsEntry],
+    corners: &[Corner],
+    buf: &'b mut [HlctsEntry],
+) -> Hlcts<'b> {
+    let bounds: [Boundary; MAX_RAYS] = core::array::from_fn(|j| {
+        let c = corners.get(j).copied().unwrap_or(corners[0]);
+        Boundary {
+            ray: c.ray,
+            records: c.records,
+            source: c.source,
+            hit: c.hit,
+        }
+    });
+    hlcts::build(tree, parent, &bounds[..corners.len()], buf)
 }
 
 fn cast_bisection<K: Kernel>(
