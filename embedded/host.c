@@ -7,4 +7,6 @@ void platform_print(const char *s) { fputs(s, stdout); }
 
 void platform_phase(const char *name) { (void)name; }
 
+uint64_t platform_instructions(void) { return UINT64_MAX; }
+
 int main(void) { return program(); }

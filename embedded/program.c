@@ -4,8 +4,8 @@
  * arenas: no allocator, no libm, no stdio (the platform prints a string).
  *
  * Per scene (two SPD scenes built in by `coray export`): a kd-tree with
- * both presets, validated; a 64 x 64 image cast hierarchically, by ropes
- * and by SLCTS-2D; rays made here traced one by one and as an array by
+ * both presets, validated; a 64 x 64 image cast hierarchically, by ropes,
+ * by SLCTS-2D and by HLCTS-2D (instructions counted where the board can); rays made here traced one by one and as an array by
  * every traversal (packets, in this build without the packet kernels,
  * ray by ray: the same hits); shadow rays from every hit to every light. With
  * EVERY_STRUCTURE also a TDBS hierarchy, an R-tree grown by inserts and
@@ -25,6 +25,10 @@
 #define ARENA_BYTES (1280u * 1024u)
 #define SCRATCH_BYTES (1024u * 1024u)
 #define MAX_LIGHTS 2
+/* Records per traversal history in the LCTS casts: HLCTS-2D's scratch
+   grows with it (at 64 x 64 pixels about 29 KiB a record), and these
+   trees' rays record far fewer. */
+#define HISTORY_CAPACITY 32
 
 static _Alignas(16) uint8_t arena[ARENA_BYTES];
 static _Alignas(16) uint8_t scratch[SCRATCH_BYTES];
@@ -242,24 +246,30 @@ static void kd_tree(const BoardScene *s, CorayKdPreset preset, const char *tag) 
     check(n, tag, digest_shape(&shape));
 
     /* Images cast by coray's own camera rays: hierarchical, ropes, SLCTS-2D
-       (the last two walk ropes: a tree without them refuses with NO_ROPES). */
+       and HLCTS-2D (all but the first walk ropes: a tree without them
+       refuses with NO_ROPES). Where the platform counts instructions, a
+       count line gives each cast's (camera rays included). */
     CorayCamera cam = camera_of(s);
     static const struct {
         CorayCastScheme scheme;
         const char *name;
     } casts[] = {{CORAY_CAST_HIERARCHICAL, "cast hierarchical"},
                  {CORAY_CAST_ROPES, "cast ropes"},
-                 {CORAY_CAST_SLCTS_2D, "cast slcts-2d"}};
+                 {CORAY_CAST_SLCTS_2D, "cast slcts-2d"},
+                 {CORAY_CAST_HLCTS_2D, "cast hlcts-2d"}};
     for (size_t c = 0; c < sizeof casts / sizeof casts[0]; c++) {
         CorayCastParams cp = coray_cast_params_default();
         cp.scheme = casts[c].scheme;
+        cp.history_capacity = HISTORY_CAPACITY;
         CorayRequirements creq = coray_requirements_default();
         st = coray_kdtree_cast_requirements(&cam, &cp, &creq);
-        expect(st == CORAY_STATUS_OK && creq.scratch_bytes <= SCRATCH_BYTES &&
-                   creq.stack_bytes <= sizeof stack,
-               n, "cast requirements", st);
+        expect(st == CORAY_STATUS_OK, n, "cast requirements", st);
+        expect(creq.scratch_bytes <= SCRATCH_BYTES && creq.stack_bytes <= sizeof stack, n,
+               "cast requirements", st);
+        uint64_t before = platform_instructions();
         st = coray_kdtree_cast_image(&tree, &cam, &cp, scratch, SCRATCH_BYTES, stack, sizeof stack,
                                      hits, NULL);
+        uint64_t after = platform_instructions();
         if (params.omit_ropes && casts[c].scheme != CORAY_CAST_HIERARCHICAL) {
             expect(st == CORAY_STATUS_NO_ROPES, n, casts[c].name, st);
             continue;
@@ -272,6 +282,7 @@ static void kd_tree(const BoardScene *s, CorayKdPreset preset, const char *tag) 
         for (p = casts[c].name; *p && k < sizeof what - 1; ) what[k++] = *p++;
         what[k] = 0;
         check(n, what, digest_hits(hits, PIXELS));
+        if (before != UINT64_MAX) line("count", n, what, after - before, 0);
     }
     platform_phase("kd casts");
 

@@ -43,6 +43,6 @@ RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --all-features --quie
 # drive toolchains (C programs, sanitizers, the bare library, the
 # install): they are #[ignore]d with their reason, and run here.
 cargo test --workspace --all-features -- --include-ignored
-# coray on a Cortex-M4 under QEMU, checked against the host (about 2 minutes;
-# installs Debian's Rust, the Arm toolchain and QEMU when missing).
+# coray on a Cortex-M4 and a RISC-V core under QEMU, checked against the
+# host (about 2 minutes; installs Debian's Rust, the Arm and RISC-V toolchains and QEMU when missing).
 scripts/embedded.sh
