@@ -44,7 +44,7 @@ Suites: $codename-backports
 Components: main
 Signed-By: /usr/share/keyrings/debian-archive-keyring.gpg
 EOF
-    local opt=(-o "Dir::Etc::SourceParts=$PWD/$parts")
+    local opt=(-o "Dir::Etc::SourceParts=$(cd "$parts" && pwd)/")
     apt-get update -qq "${opt[@]}" &&
         apt_install "${opt[@]}" -t "$codename-backports" qemu-system-arm qemu-system-riscv
 }
