@@ -113,7 +113,7 @@ firmware() {
     for variant in kd every; do
         local defs=()
         [ "$variant" = every ] && defs=(-DEVERY_STRUCTURE)
-        "$cc" "${common[@]}" "$@" "${defs[@]}" "embedded/$board/startup.c" embedded/program.c "$lib" \
+        "$cc" "${common[@]}" "$@" "${defs[@]}" "embedded/$board/startup.c" embedded/board.c embedded/program.c "$lib" \
             -T "embedded/$board/link.ld" "${nolibc[@]}" -Wl,-Map="$out/$board-$variant.map" \
             -o "$out/$board-$variant.elf"
     done

@@ -1,18 +1,15 @@
 /* Cortex-M4F start-up for QEMU's mps2-an386 (the project's own; no vendor
- * files): the vector table, a reset handler that enables the FPU, copies
- * .data, zeroes .bss and paints the stack, and semihosting for printing
- * and for the exit status; the instruction counter reads the FPGA's
- * 25 MHz counter, which QEMU's -icount turns into exact instructions.
- * After the program, it reports the stack's high-water mark (the deepest
- * painted word overwritten). */
+ * files): the vector table, a reset handler that enables the FPU and runs
+ * the program (board.c: .data, .bss, the painted stack), semihosting for
+ * printing and for the exit status; the instruction counter reads the
+ * FPGA's 25 MHz counter, which QEMU's -icount turns into instructions. */
 #include <stdint.h>
 
+#include "board.h"
 #include "program.h"
 
-extern uint32_t _sidata, _sdata, _edata, _sbss, _ebss, _sstack, _estack;
-extern int program(void);
+extern uint32_t _estack;
 
-#define PAINT 0xC0A7C0A7u
 #define SYS_WRITE0 0x04
 #define SYS_EXIT 0x18
 #define ADP_STOPPED_APPLICATION_EXIT 0x20026
@@ -44,53 +41,17 @@ uint64_t platform_instructions(void) {
     return ticks * COUNTER_NS_PER_TICK / ICOUNT_NS_PER_INSTRUCTION;
 }
 
-static void print_u32(uint32_t v) {
-    char buf[12];
-    int i = 11;
-    buf[i] = 0;
-    do {
-        buf[--i] = (char)('0' + v % 10);
-        v /= 10;
-    } while (v);
-    platform_print(buf + i);
-}
-
-static uint32_t stack_high_water(void) {
-    uint32_t *p = &_sstack;
-    while (p < &_estack && *p == PAINT) p++;
-    return (uint32_t)((uintptr_t)&_estack - (uintptr_t)p);
-}
-
-static void paint_below_sp(void) {
+uint32_t *board_sp(void) {
     uint32_t *sp;
     __asm__ volatile("mov %0, sp" : "=r"(sp));
-    for (uint32_t *p = &_sstack; p < sp - 16; p++) *p = PAINT;
-}
-
-void platform_phase(const char *name) {
-    platform_print("board stack ");
-    platform_print(name);
-    platform_print(" bytes ");
-    print_u32(stack_high_water());
-    platform_print("\n");
-    paint_below_sp();
+    return sp;
 }
 
 __attribute__((noreturn)) void Reset_Handler(void) {
     /* CP10 and CP11 full access: the FPU, before any float instruction. */
     *(volatile uint32_t *)0xE000ED88u |= 0xFu << 20;
     __asm__ volatile("dsb\n isb");
-    for (uint32_t *s = &_sidata, *d = &_sdata; d < &_edata;) *d++ = *s++;
-    for (uint32_t *d = &_sbss; d < &_ebss;) *d++ = 0;
-    /* Paint the stack below what this function uses now. */
-    paint_below_sp();
-    uint32_t before = stack_high_water();
-    int status = program();
-    platform_print("board stack before the program bytes ");
-    print_u32(before);
-    platform_print(" of ");
-    print_u32((uint32_t)((uintptr_t)&_estack - (uintptr_t)&_sstack));
-    platform_print("\n");
+    int status = board_run();
     semihost(SYS_EXIT, (const void *)(uintptr_t)(status == 0 ? ADP_STOPPED_APPLICATION_EXIT
                                                              : ADP_STOPPED_RUN_TIME_ERROR));
     for (;;) {

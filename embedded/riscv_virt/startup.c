@@ -1,17 +1,13 @@
 /* RV32IMAFC start-up for QEMU's virt machine (the project's own): _start
  * sets the stack, turns the FPU on (mstatus.FS) and a trap vector, then
- * reset() copies .data, zeroes .bss, paints the stack and runs the
- * program; semihosting prints and gives the exit status; the
- * instruction counter is minstret, which QEMU's -icount makes exact.
- * After the program it reports the stack's high-water mark, as the
- * Cortex-M4's start-up does. */
+ * reset() runs the program (board.c: .data, .bss, the painted stack);
+ * semihosting prints and gives the exit status; the instruction counter
+ * is minstret, which QEMU's -icount makes exact. */
 #include <stdint.h>
 
+#include "board.h"
 #include "program.h"
 
-extern uint32_t _sidata, _sdata, _edata, _sbss, _ebss, _sstack, _estack;
-
-#define PAINT 0xC0A7C0A7u
 #define SYS_WRITE0 0x04
 #define SYS_EXIT 0x18
 #define ADP_STOPPED_APPLICATION_EXIT 0x20026
@@ -58,36 +54,10 @@ uint64_t platform_instructions(void) {
     return (uint64_t)hi << 32 | lo;
 }
 
-static void print_u32(uint32_t v) {
-    char buf[12];
-    int i = 11;
-    buf[i] = 0;
-    do {
-        buf[--i] = (char)('0' + v % 10);
-        v /= 10;
-    } while (v);
-    platform_print(buf + i);
-}
-
-static uint32_t stack_high_water(void) {
-    uint32_t *p = &_sstack;
-    while (p < &_estack && *p == PAINT) p++;
-    return (uint32_t)((uintptr_t)&_estack - (uintptr_t)p);
-}
-
-static void paint_below_sp(void) {
+uint32_t *board_sp(void) {
     uint32_t *sp;
     __asm__ volatile("mv %0, sp" : "=r"(sp));
-    for (uint32_t *p = &_sstack; p < sp - 16; p++) *p = PAINT;
-}
-
-void platform_phase(const char *name) {
-    platform_print("board stack ");
-    platform_print(name);
-    platform_print(" bytes ");
-    print_u32(stack_high_water());
-    platform_print("\n");
-    paint_below_sp();
+    return sp;
 }
 
 __attribute__((noreturn)) static void stop(int ok) {
@@ -98,16 +68,7 @@ __attribute__((noreturn)) static void stop(int ok) {
 }
 
 __attribute__((noreturn, used)) void reset(void) {
-    for (uint32_t *s = &_sidata, *d = &_sdata; d < &_edata;) *d++ = *s++;
-    for (uint32_t *d = &_sbss; d < &_ebss;) *d++ = 0;
-    paint_below_sp();
-    uint32_t before = stack_high_water();
-    int status = program();
-    platform_print("board stack before the program bytes ");
-    print_u32(before);
-    platform_print(" of ");
-    print_u32((uint32_t)((uintptr_t)&_estack - (uintptr_t)&_sstack));
-    platform_print("\n");
+    int status = board_run();
     stop(status == 0);
 }
 
@@ -116,7 +77,7 @@ __attribute__((noreturn, used)) void trap(void) {
     uint32_t cause;
     __asm__ volatile("csrr %0, mcause" : "=r"(cause));
     platform_print("embedded: FAILED (trap, mcause ");
-    print_u32(cause);
+    board_print_u32(cause);
     platform_print(")\n");
     stop(0);
 }
